@@ -1,0 +1,44 @@
+# Every target that runs code first makes sure the environment exists, so a
+# fresh machine needs nothing but `make demo` or `make test`.
+PYTHON ?= python3
+VENV   := .venv
+BIN    := $(VENV)/bin
+STAMP  := $(VENV)/.installed
+# open3d needs libusb and libgomp at import time; MuJoCo's headless renderer
+# needs EGL (GPU-less Mesa) with OSMesa as the fallback.
+SYSTEM_LIBS := libusb-1.0-0 libgomp1 libegl1 libgl1 libegl-mesa0 libgl1-mesa-dri libosmesa6
+
+.PHONY: setup system-libs test demo bench lint clean
+
+setup: $(STAMP)
+
+system-libs:
+	@missing=""; for p in $(SYSTEM_LIBS); do \
+	  dpkg -s $$p >/dev/null 2>&1 || missing="$$missing $$p"; done; \
+	if [ -n "$$missing" ]; then \
+	  echo "installing system libraries:$$missing"; \
+	  SUDO=""; [ "$$(id -u)" -eq 0 ] || SUDO="sudo"; \
+	  $$SUDO apt-get update -qq && \
+	  DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq --no-install-recommends $$missing; \
+	fi
+
+$(STAMP): pyproject.toml | system-libs
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/pip install -q --upgrade pip
+	$(BIN)/pip install -q -e ".[dev]"
+	touch $(STAMP)
+
+test: setup
+	$(BIN)/python -m pytest -q
+
+demo: setup
+	$(BIN)/python -m psorr.demo
+
+bench: setup
+	$(BIN)/python benchmarks/decompose.py
+
+lint: setup
+	$(BIN)/ruff check psorr sim tests benchmarks
+
+clean:
+	rm -rf $(VENV) build *.egg-info

@@ -1,0 +1,22 @@
+"""The exception hierarchy: everything psorr raises on purpose derives from PsorrError."""
+
+from __future__ import annotations
+
+
+class PsorrError(Exception):
+    """Root of every error psorr raises on purpose; catch this to handle them all."""
+
+
+class InvalidInputError(PsorrError, ValueError):
+    """An argument has the wrong shape, type or value. The message names the fix."""
+
+
+class CloudFileError(PsorrError):
+    """A cloud or mesh file is missing, empty, all-NaN, malformed or of an unknown format."""
+
+    def __init__(self, path, problem: str, fix: str = ""):
+        self.path = str(path)
+        message = f"{self.path}: {problem}"
+        if fix:
+            message += f" ({fix})"
+        super().__init__(message)

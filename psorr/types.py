@@ -1,0 +1,217 @@
+"""Typed, frozen values passed between the stages of the pipeline.
+
+Units are metres; clouds live in the sensor frame with OpenCV axes (x right,
+y down, z forward). Arrays are copied on construction and made read-only, so a
+value cannot change under a later stage.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import StrEnum
+
+import numpy as np
+
+from psorr.errors import InvalidInputError
+
+
+def _frozen_array(value, name: str, dtype, shape_tail: tuple[int, ...], n: int | None = None):
+    try:
+        array = np.array(value, dtype=dtype, copy=True)
+    except (TypeError, ValueError) as exc:
+        raise InvalidInputError(f"{name} must be convertible to a {np.dtype(dtype).name} array: {exc}") from None
+    expected_ndim = 1 + len(shape_tail)
+    if array.ndim != expected_ndim or array.shape[1:] != shape_tail:
+        want = "(N" + "".join(f", {s}" for s in shape_tail) + ")"
+        raise InvalidInputError(f"{name} must have shape {want}, got {array.shape}")
+    if n is not None and array.shape[0] != n:
+        raise InvalidInputError(f"{name} has {array.shape[0]} rows but the cloud has {n} points")
+    array.setflags(write=False)
+    return array
+
+
+@dataclass(frozen=True, eq=False)
+class PointCloud:
+    """A cloud of N points, optionally organised as a height x width image.
+
+    Attributes:
+        points: (N, 3) float64 metres. Rows may be NaN (invalid pixels of an
+            organised cloud); they keep their place so that per-point outputs
+            line up with the file.
+        normals: optional (N, 3) float64 unit vectors.
+        colors: optional (N, 3) float64 RGB in [0, 1].
+        labels: optional (N,) int64 per-point labels (for example ground truth).
+        width, height: the organised image size, or None for an unorganised cloud.
+    """
+
+    points: np.ndarray
+    normals: np.ndarray | None = None
+    colors: np.ndarray | None = None
+    labels: np.ndarray | None = None
+    width: int | None = None
+    height: int | None = None
+
+    def __post_init__(self):
+        points = _frozen_array(self.points, "points", np.float64, (3,))
+        n = len(points)
+        object.__setattr__(self, "points", points)
+        if self.normals is not None:
+            object.__setattr__(self, "normals", _frozen_array(self.normals, "normals", np.float64, (3,), n))
+        if self.colors is not None:
+            colors = _frozen_array(self.colors, "colors", np.float64, (3,), n)
+            finite = colors[np.isfinite(colors)]
+            if finite.size and (finite.min() < 0.0 or finite.max() > 1.0):
+                raise InvalidInputError("colors must be RGB floats in [0, 1]; divide 8-bit colours by 255")
+            object.__setattr__(self, "colors", colors)
+        if self.labels is not None:
+            object.__setattr__(self, "labels", _frozen_array(self.labels, "labels", np.int64, (), n))
+        if (self.width is None) != (self.height is None):
+            raise InvalidInputError("give both width and height for an organised cloud, or neither")
+        if self.width is not None and self.width * self.height != n:
+            raise InvalidInputError(
+                f"an organised cloud of {self.width}x{self.height} needs {self.width * self.height} points, got {n}"
+            )
+
+    def __len__(self) -> int:
+        return len(self.points)
+
+    @property
+    def is_organised(self) -> bool:
+        return self.width is not None
+
+    @property
+    def valid_mask(self) -> np.ndarray:
+        """(N,) bool: True where the point is finite."""
+        return np.isfinite(self.points).all(axis=1)
+
+
+class PrimitiveKind(StrEnum):
+    """The shape families a cloud is decomposed into."""
+
+    PLANE = "plane"
+    CYLINDER = "cylinder"
+
+    @property
+    def n_params(self) -> int:
+        """Descriptor length used by the MDL fitness."""
+        return {PrimitiveKind.PLANE: 4, PrimitiveKind.CYLINDER: 7}[self]
+
+
+@dataclass(frozen=True, eq=False)
+class OrientedBox:
+    """A box with centre (3,), rotation (3, 3) whose columns are its axes in the
+    cloud frame, and extent (3,) full side lengths in metres."""
+
+    center: np.ndarray
+    rotation: np.ndarray
+    extent: np.ndarray
+
+    def __post_init__(self):
+        object.__setattr__(self, "center", _frozen_array(np.ravel(self.center), "center", np.float64, ()))
+        object.__setattr__(self, "extent", _frozen_array(np.ravel(self.extent), "extent", np.float64, ()))
+        rotation = np.array(self.rotation, dtype=np.float64)
+        if rotation.shape != (3, 3) or self.center.shape != (3,) or self.extent.shape != (3,):
+            raise InvalidInputError("an OrientedBox needs center (3,), rotation (3, 3) and extent (3,)")
+        rotation.setflags(write=False)
+        object.__setattr__(self, "rotation", rotation)
+
+    @property
+    def volume(self) -> float:
+        return float(np.prod(self.extent))
+
+    def corners(self) -> np.ndarray:
+        """(8, 3) corner points in the cloud frame."""
+        signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], float)
+        return self.center + (signs * self.extent / 2.0) @ self.rotation.T
+
+
+@dataclass(frozen=True, eq=False)
+class Primitive:
+    """One shape found in a cloud.
+
+    Attributes:
+        kind: plane or cylinder.
+        params: plane (nx, ny, nz, d) with n.x + d = 0 and n towards the sensor;
+            cylinder (px, py, pz, ax, ay, az, r): a point on the axis, the unit
+            axis direction and the radius, all in metres.
+        inliers: (M,) int64 indices into the decomposed cloud's points.
+        centroid: (3,) mean of the inlier points.
+        box: the minimum-volume oriented bounding box of the inliers.
+    """
+
+    kind: PrimitiveKind
+    params: tuple[float, ...]
+    inliers: np.ndarray
+    centroid: np.ndarray
+    box: OrientedBox
+
+    def __post_init__(self):
+        kind = PrimitiveKind(self.kind)
+        object.__setattr__(self, "kind", kind)
+        params = tuple(float(p) for p in self.params)
+        if len(params) != kind.n_params:
+            raise InvalidInputError(f"a {kind.value} has {kind.n_params} params, got {len(params)}")
+        object.__setattr__(self, "params", params)
+        object.__setattr__(self, "inliers", _frozen_array(self.inliers, "inliers", np.int64, ()))
+        object.__setattr__(self, "centroid", _frozen_array(np.ravel(self.centroid), "centroid", np.float64, ()))
+
+    def _require(self, kind: PrimitiveKind, what: str):
+        if self.kind is not kind:
+            raise InvalidInputError(f"{what} is defined for a {kind.value}, this primitive is a {self.kind.value}")
+
+    @property
+    def normal(self) -> np.ndarray:
+        """(3,) unit normal of a plane, pointing towards the sensor."""
+        self._require(PrimitiveKind.PLANE, "normal")
+        return np.array(self.params[:3])
+
+    @property
+    def offset(self) -> float:
+        """d of the plane n.x + d = 0, metres."""
+        self._require(PrimitiveKind.PLANE, "offset")
+        return self.params[3]
+
+    @property
+    def axis_point(self) -> np.ndarray:
+        self._require(PrimitiveKind.CYLINDER, "axis_point")
+        return np.array(self.params[:3])
+
+    @property
+    def axis(self) -> np.ndarray:
+        """(3,) unit direction of a cylinder's axis."""
+        self._require(PrimitiveKind.CYLINDER, "axis")
+        return np.array(self.params[3:6])
+
+    @property
+    def radius(self) -> float:
+        self._require(PrimitiveKind.CYLINDER, "radius")
+        return self.params[6]
+
+    @property
+    def n_points(self) -> int:
+        return len(self.inliers)
+
+
+@dataclass(frozen=True, eq=False)
+class PrimitiveShapeGraph:
+    """Primitives as nodes; an edge (i, j), i < j, joins primitives whose inlier
+    points come within the adjacency distance of each other."""
+
+    primitives: tuple[Primitive, ...]
+    edges: tuple[tuple[int, int], ...] = field(default_factory=tuple)
+
+    def __post_init__(self):
+        primitives = tuple(self.primitives)
+        n = len(primitives)
+        edges = sorted({(min(int(i), int(j)), max(int(i), int(j))) for i, j in self.edges})
+        for i, j in edges:
+            if i == j or not (0 <= i < n and 0 <= j < n):
+                raise InvalidInputError(f"edge ({i}, {j}) does not join two of the {n} primitives")
+        object.__setattr__(self, "primitives", primitives)
+        object.__setattr__(self, "edges", tuple(edges))
+
+    def __len__(self) -> int:
+        return len(self.primitives)
+
+    def neighbours(self, index: int) -> list[int]:
+        return sorted({j for i, j in self.edges if i == index} | {i for i, j in self.edges if j == index})
