@@ -1,0 +1,340 @@
+"""Reading and writing point clouds (PCD, PLY, XYZ/TXT, NPY) and meshes (STL, OBJ, PLY).
+
+Every failure caused by the file -- missing, empty, unknown suffix, malformed,
+truncated, zero points, all points NaN -- raises CloudFileError naming the file
+and what to do, never a bare numpy/trimesh exception. NaN rows are kept: an
+organised cloud's invalid pixels stay in place and the caller decides.
+
+What each format keeps when written:
+
+======  ======  =======  =======  ======  =========  ===================================
+format  points  normals  colours  labels  organised  notes
+======  ======  =======  =======  ======  =========  ===================================
+.pcd    yes     yes      yes      yes     yes        float32 points, 8-bit colours
+.ply    yes     yes      yes      yes     no         float64 points, 8-bit colours
+.xyz    yes     yes      no       no      no         text, exact float64 (also .txt)
+.npy    yes     yes      no       no      yes        (N, 3|6) or (H, W, 3|6) float64
+======  ======  =======  =======  ======  =========  ===================================
+"""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from psorr.errors import CloudFileError, InvalidInputError
+from psorr.pcd import (
+    Field,
+    cloud_from_fields,
+    decode_ascii,
+    decode_binary,
+    decode_pcd,
+    encode_pcd,
+    encode_records,
+    load_table,
+)
+from psorr.types import PointCloud
+
+if TYPE_CHECKING:
+    import trimesh
+
+CLOUD_SUFFIXES = (".pcd", ".ply", ".xyz", ".txt", ".npy")
+MESH_SUFFIXES = (".stl", ".obj", ".ply")
+
+_PLY_TYPES = {
+    "char": "i1", "uchar": "u1", "short": "i2", "ushort": "u2", "int": "i4", "uint": "u4",
+    "float": "f4", "double": "f8", "int8": "i1", "uint8": "u1", "int16": "i2",
+    "uint16": "u2", "int32": "i4", "uint32": "u4", "float32": "f4", "float64": "f8",
+}  # fmt: skip
+_PLY_ENDIAN = {"ascii": "<", "binary_little_endian": "<", "binary_big_endian": ">"}
+_PLY_MAX_HEADER = 1 << 16  # bytes; a header longer than this is not a PLY header
+_NORMALS = ("nx", "ny", "nz")
+_BAD_PLY = "re-export the file, or check it was copied completely"
+
+
+def _suffix(path: Path, allowed: tuple[str, ...], what: str) -> str:
+    suffix = path.suffix.lower()
+    if suffix not in allowed:
+        raise CloudFileError(path, f"unknown {what} format {suffix or '(no suffix)'!r}",
+                             f"use one of {', '.join(allowed)}")
+    return suffix
+
+
+def _check_file(path: Path) -> None:
+    """CloudFileError unless ``path`` is an existing, non-empty file."""
+    if not path.exists():
+        raise CloudFileError(path, "file not found", "check the path and the working directory")
+    if path.is_dir():
+        raise CloudFileError(path, "is a directory", "pass a file inside it")
+    if path.stat().st_size == 0:
+        raise CloudFileError(path, "the file is empty", "re-export the file or check the copy")
+
+
+def _read_bytes(path: Path) -> bytes:
+    _check_file(path)
+    try:
+        return path.read_bytes()
+    except OSError as exc:
+        raise CloudFileError(path, f"cannot read: {exc.strerror}", "check permissions") from None
+
+
+# ------------------------------------------------------------------------------ read
+
+
+def read_cloud(path) -> PointCloud:
+    """Read a cloud from .pcd, .ply, .xyz/.txt or .npy (suffix case-insensitive).
+
+    Returns a PointCloud of N points, (N, 3) float64 metres as stored in the file,
+    with normals / colours in [0, 1] / int64 labels where the format holds them.
+    PCD with HEIGHT > 1 and (H, W, 3) NPY give organised clouds (row-major, N = H*W);
+    NaN rows are kept.
+
+    .xyz/.txt: whitespace-separated ``x y z`` or ``x y z nx ny nz`` rows, ``#`` comments.
+    .npy: (N, 3), (N, 6) (xyz + normals), (H, W, 3) or (H, W, 6) numeric array.
+    .ply: vertex x/y/z, optional nx/ny/nz, red/green/blue and label properties.
+
+    Raises:
+        CloudFileError: unknown suffix, missing/empty/malformed/truncated file,
+            zero points or every point NaN.
+    """
+    path = Path(path)
+    suffix = _suffix(path, CLOUD_SUFFIXES, "point-cloud")
+    data = _read_bytes(path)
+    if suffix == ".pcd":
+        return decode_pcd(path, data)
+    if suffix == ".ply":
+        return _decode_ply(path, data)
+    if suffix == ".npy":
+        return _decode_npy(path, data)
+    return _decode_xyz(path, data)
+
+
+def _columns_to_cloud(path: Path, columns: np.ndarray, width=None, height=None) -> PointCloud:
+    """(N, 3) xyz or (N, 6) xyz + normals -> a checked PointCloud."""
+    names = ("x", "y", "z", *_NORMALS)[: columns.shape[1]]
+    return cloud_from_fields(path, dict(zip(names, columns.T, strict=True)), width, height)
+
+
+def _decode_xyz(path: Path, data: bytes) -> PointCloud:
+    try:
+        table = load_table(io.StringIO(data.decode("utf-8")))
+    except (UnicodeDecodeError, ValueError) as exc:
+        raise CloudFileError(path, f"malformed text cloud: {exc}",
+                             "write whitespace-separated numbers, one point per row") from None
+    if table.size == 0:
+        table = np.empty((0, 3))  # only comments: cloud_from_fields reports zero points
+    if table.shape[1] not in (3, 6):
+        raise CloudFileError(path, f"rows have {table.shape[1]} columns",
+                             "use 3 columns (x y z) or 6 (x y z nx ny nz)")
+    return _columns_to_cloud(path, table)
+
+
+def _decode_npy(path: Path, data: bytes) -> PointCloud:
+    if not data.startswith(b"\x93NUMPY"):
+        raise CloudFileError(path, "not a .npy file (no NUMPY magic bytes)",
+                             "save the array with numpy.save")
+    try:
+        array = np.load(io.BytesIO(data), allow_pickle=False)
+    except (ValueError, OSError, EOFError) as exc:
+        raise CloudFileError(path, f"not a readable .npy array: {exc}",
+                             "save the array with numpy.save") from None
+    if not isinstance(array, np.ndarray):  # an .npz archive renamed to .npy
+        raise CloudFileError(path, "holds an .npz archive, not one array", "use numpy.save")
+    if array.dtype.kind not in "fiu" or array.ndim not in (2, 3) or array.shape[-1] not in (3, 6):
+        raise CloudFileError(path, f"array of shape {array.shape} and dtype {array.dtype}",
+                             "save a float array of shape (N, 3), (N, 6), (H, W, 3) or (H, W, 6)")
+    if array.ndim == 3:
+        height, width = array.shape[:2]
+        return _columns_to_cloud(path, array.reshape(-1, array.shape[-1]), width, height)
+    return _columns_to_cloud(path, array)
+
+
+def _parse_ply_header(path: Path, data: bytes):
+    """-> (format, elements [(name, count, [(property, dtype code or None for a list)])],
+    offset of the data)."""
+    end = data.find(b"end_header", 0, _PLY_MAX_HEADER)
+    newline = data.find(b"\n", end)
+    if not data.startswith(b"ply") or end < 0 or newline < 0:
+        raise CloudFileError(path, "malformed PLY header: no 'ply' magic or 'end_header' line",
+                             _BAD_PLY)
+    try:
+        lines = data[:end].decode("ascii").splitlines()[1:]
+    except UnicodeDecodeError:
+        raise CloudFileError(path, "malformed PLY header: non-text bytes", _BAD_PLY) from None
+    fmt, elements = None, []
+    for line in lines:
+        words = line.split()
+        try:
+            if not words or words[0] in ("comment", "obj_info"):
+                continue
+            if words[0] == "format" and words[1] in _PLY_ENDIAN:
+                fmt = words[1]
+            elif words[0] == "element" and int(words[2]) >= 0:
+                elements.append((words[1], int(words[2]), []))
+            elif words[0] == "property" and words[1] == "list":
+                elements[-1][2].append((words[4], None))  # variable length: no one dtype
+            elif words[0] == "property":
+                elements[-1][2].append((words[2], _PLY_TYPES[words[1]]))
+            else:
+                raise ValueError
+        except (IndexError, KeyError, ValueError):
+            raise CloudFileError(path, f"malformed PLY header line {line.strip()[:60]!r}",
+                                 _BAD_PLY) from None
+    if fmt is None:
+        raise CloudFileError(path, "malformed PLY header: no supported 'format' line", _BAD_PLY)
+    return fmt, elements, newline + 1
+
+
+def _decode_ply(path: Path, data: bytes) -> PointCloud:
+    fmt, elements, offset = _parse_ply_header(path, data)
+    endian, skip_rows = _PLY_ENDIAN[fmt], 0
+    for name, count, properties in elements:
+        has_list = any(code is None for _, code in properties)
+        if name == "vertex":
+            break
+        if has_list and fmt != "ascii":
+            # Skipping variable-length rows needs a per-row walk; no exporter we know of
+            # puts them before the vertices, so refuse rather than guess.
+            raise CloudFileError(path, f"the {name!r} element with list properties comes "
+                                 "before the vertices", "re-export with vertices first")
+        offset += count * sum(np.dtype(code).itemsize for _, code in properties)
+        skip_rows += count
+    else:
+        raise CloudFileError(path, "no vertex element", "export the cloud's vertices")
+    if has_list:
+        raise CloudFileError(path, "the vertex element has list properties",
+                             "re-export with scalar vertex properties only")
+    fields = [Field(p, np.dtype(endian + code)) for p, code in properties]
+    if fmt == "ascii":
+        try:
+            text = data[offset:].decode("ascii")
+        except UnicodeDecodeError:
+            raise CloudFileError(path, "ascii PLY data holds non-text bytes", _BAD_PLY) from None
+        columns = decode_ascii(path, text, fields, count, skip_rows=skip_rows, exact=False)
+    else:
+        columns = decode_binary(path, data, offset, fields, count)
+    return cloud_from_fields(path, columns)
+
+
+def read_mesh(path) -> trimesh.Trimesh:
+    """Read a triangle mesh from .stl, .obj or .ply (vertices in the file's units).
+
+    A file holding several meshes is concatenated into one (trimesh ``force='mesh'``).
+
+    Raises:
+        CloudFileError: unknown suffix, missing/empty/unparseable file, or no faces.
+    """
+    import trimesh  # imported here: it is slow to import and only meshes need it
+
+    path = Path(path)
+    _suffix(path, MESH_SUFFIXES, "mesh")
+    _check_file(path)
+    try:
+        mesh = trimesh.load(path, force="mesh")
+    except Exception as exc:  # trimesh's many loaders raise many exception types
+        raise CloudFileError(path, f"cannot be read as a mesh: {type(exc).__name__}: {exc}",
+                             "re-export it as STL, OBJ or PLY") from None
+    if not isinstance(mesh, trimesh.Trimesh):
+        raise CloudFileError(path, f"holds a {type(mesh).__name__}, not one triangle mesh",
+                             "export a single mesh")
+    if len(mesh.faces) == 0:
+        raise CloudFileError(path, "the mesh has no faces",
+                             "export the surface, not just its vertices")
+    return mesh
+
+
+# ----------------------------------------------------------------------------- write
+
+
+def write_cloud(
+    path, cloud: PointCloud, *, binary: bool = True, compressed: bool = False
+) -> None:
+    """Write ``cloud`` as .pcd, .ply, .xyz/.txt or .npy, chosen by suffix.
+
+    ``binary`` selects binary or ascii PCD/PLY (XYZ is always text, NPY always
+    binary); ``compressed`` selects PCD ``binary_compressed`` (LZF). See the module
+    docstring for what each format keeps; read_cloud reads every file written here.
+
+    Raises:
+        InvalidInputError: not a PointCloud, no points, or options that do not apply.
+        CloudFileError: unknown suffix or the file cannot be written.
+    """
+    path = Path(path)
+    suffix = _suffix(path, CLOUD_SUFFIXES, "point-cloud")
+    if not isinstance(cloud, PointCloud):
+        raise InvalidInputError(f"write_cloud needs a PointCloud, got {type(cloud).__name__}")
+    if len(cloud) == 0:
+        raise InvalidInputError("cannot write a cloud with zero points; no reader would accept it")
+    if compressed and (suffix != ".pcd" or not binary):
+        raise InvalidInputError("compressed=True applies to binary .pcd files only")
+    if suffix == ".pcd":
+        data = encode_pcd(cloud, "binary_compressed" if compressed else
+                          "binary" if binary else "ascii")
+    elif suffix == ".ply":
+        data = _encode_ply(cloud, binary)
+    elif suffix == ".npy":
+        data = _encode_npy(cloud)
+    else:
+        data = _encode_xyz(cloud)
+    try:
+        path.write_bytes(data)
+    except OSError as exc:
+        raise CloudFileError(path, f"cannot write: {exc.strerror}",
+                             "check the directory exists and is writable") from None
+
+
+def _xyz_normals(cloud: PointCloud) -> np.ndarray:
+    """(N, 3) points or (N, 6) points + normals, float64."""
+    if cloud.normals is None:
+        return np.asarray(cloud.points)
+    return np.hstack([cloud.points, cloud.normals])
+
+
+def _encode_xyz(cloud: PointCloud) -> bytes:
+    buffer = io.StringIO()
+    columns = "x y z nx ny nz" if cloud.normals is not None else "x y z"
+    # 17 significant digits give back exactly the same float64.
+    np.savetxt(buffer, _xyz_normals(cloud), fmt="%.17g", header=columns)
+    return buffer.getvalue().encode("ascii")
+
+
+def _encode_npy(cloud: PointCloud) -> bytes:
+    array = _xyz_normals(cloud)
+    if cloud.is_organised:
+        array = array.reshape(cloud.height, cloud.width, -1)
+    buffer = io.BytesIO()
+    np.save(buffer, array)
+    return buffer.getvalue()
+
+
+def _encode_ply(cloud: PointCloud, binary: bool) -> bytes:
+    f8 = np.dtype("<f8")
+    fields = [Field(axis, f8) for axis in "xyz"]
+    columns = [cloud.points[:, i] for i in range(3)]
+    if cloud.normals is not None:
+        fields += [Field(name, f8) for name in _NORMALS]
+        columns += [cloud.normals[:, i] for i in range(3)]
+    if cloud.colors is not None:
+        if not np.isfinite(cloud.colors).all():
+            raise InvalidInputError("colors hold NaN; PLY colours are 8-bit integers")
+        fields += [Field(name, np.dtype("u1")) for name in ("red", "green", "blue")]
+        columns += list(np.rint(cloud.colors * 255).astype(np.uint8).T)
+    if cloud.labels is not None:
+        if cloud.labels.min() < -(2**31) or cloud.labels.max() >= 2**31:
+            raise InvalidInputError("PLY labels are int32; these labels do not fit")
+        fields.append(Field("label", np.dtype("<i4")))
+        columns.append(cloud.labels)
+    names = {"f8": "double", "u1": "uchar", "i4": "int"}
+    header = [
+        "ply",
+        "format binary_little_endian 1.0" if binary else "format ascii 1.0",
+        "comment written by psorr",
+        f"element vertex {len(cloud)}",
+        *(f"property {names[f.dtype.str[1:]]} {f.name}" for f in fields),
+        "end_header",
+    ]
+    body = encode_records(fields, columns, ascii=not binary)
+    return ("\n".join(header) + "\n").encode("ascii") + body
