@@ -305,7 +305,9 @@ def cylinder_on_table(
     lying = trimesh.transformations.rotation_matrix(np.pi / 2, (0.0, 1.0, 0.0))
     T = _translate(x, y, radius) @ _rotate_z(rng.uniform(0.0, np.pi)) @ lying
     layout.add_cylinder("cylinder", radius, length, T, caps=("cap_a", "cap_b"))
-    layout.touching.append(("table_top", "cylinder_side"))
+    # The end caps rest on the table too, at the lowest point of each rim.
+    layout.touching += [("table_top", "cylinder_side"), ("table_top", "cylinder_cap_a"),
+                        ("table_top", "cylinder_cap_b")]
     return _render_scene(layout, _random_camera(rng, (x, y, 0.0)), rng, noise)
 
 
