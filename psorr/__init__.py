@@ -1,0 +1,24 @@
+"""psorr: Primitive Shape Object Recognition RANSAC.
+
+Decompose depth clouds into planes and cylinders and their primitive shape
+graph; recognise CAD-trained workpieces from it. Never imports the simulator.
+"""
+
+from psorr.decomposition import DecomposeParams, Decomposition, decompose
+from psorr.errors import CloudFileError, InvalidInputError, PsorrError
+from psorr.types import OrientedBox, PointCloud, Primitive, PrimitiveKind, PrimitiveShapeGraph
+
+__all__ = [
+    "CloudFileError",
+    "Decomposition",
+    "DecomposeParams",
+    "InvalidInputError",
+    "OrientedBox",
+    "PointCloud",
+    "Primitive",
+    "PrimitiveKind",
+    "PrimitiveShapeGraph",
+    "PsorrError",
+    "decompose",
+]
+__version__ = "0.1.0"

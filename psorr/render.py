@@ -1,0 +1,94 @@
+"""Pictures of decompositions: the cloud coloured by primitive, cylinders in
+reds and planes in blue-greens (as in the paper's Fig. 6), with the primitive
+shape graph drawn between centroids."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")  # headless: pictures go to files, never to a window
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from psorr.types import PointCloud, PrimitiveKind, PrimitiveShapeGraph  # noqa: E402
+
+UNLABELLED_RGB = (0.78, 0.78, 0.78)
+
+
+def primitive_colors(graph: PrimitiveShapeGraph) -> np.ndarray:
+    """(P, 3) RGB per primitive: planes spread over blue-greens, cylinders over reds."""
+    colors = np.zeros((len(graph), 3))
+    planes = [i for i, p in enumerate(graph.primitives) if p.kind is PrimitiveKind.PLANE]
+    cylinders = [i for i, p in enumerate(graph.primitives) if p.kind is PrimitiveKind.CYLINDER]
+    # Alternate ends of the ramp so neighbours in index order differ visibly.
+    for indices, cmap, lo, hi in ((planes, plt.get_cmap("GnBu"), 0.35, 1.0),
+                                  (cylinders, plt.get_cmap("Reds"), 0.35, 1.0)):
+        if not indices:
+            continue
+        ramp = np.linspace(lo, hi, len(indices))
+        ramp = np.concatenate([ramp[0::2], ramp[1::2][::-1]])
+        for i, t in zip(indices, ramp):
+            colors[i] = cmap(t)[:3]
+    return colors
+
+
+def _project(points: np.ndarray, width: int, height: int):
+    """Pinhole projection from the sensor origin, scaled so the cloud fills the image."""
+    z = np.maximum(points[:, 2], 1e-6)
+    u, v = points[:, 0] / z, points[:, 1] / z
+    scale = 0.95 * min(width / max(np.ptp(u), 1e-9), height / max(np.ptp(v), 1e-9))
+    cu, cv = (u.max() + u.min()) / 2, (v.max() + v.min()) / 2
+    return scale * (u - cu) + width / 2, scale * (v - cv) + height / 2
+
+
+def label_image(cloud: PointCloud, labels: np.ndarray, graph: PrimitiveShapeGraph,
+                width: int = 640, height: int = 480) -> tuple[np.ndarray, np.ndarray]:
+    """RGB image (H, W, 3) of the cloud coloured by label, and the pixel of each point (N, 2)."""
+    colors = np.vstack([primitive_colors(graph), UNLABELLED_RGB])  # label -1 -> last row
+    valid = cloud.valid_mask
+    if cloud.is_organised:
+        width, height = cloud.width, cloud.height
+        rows, cols = np.divmod(np.arange(len(cloud)), width)
+        px = np.column_stack([cols, rows]).astype(float)
+    else:
+        px = np.full((len(cloud), 2), np.nan)
+        px[valid, 0], px[valid, 1] = _project(cloud.points[valid], width, height)
+    image = np.ones((height, width, 3))
+    idx = np.flatnonzero(valid)
+    # Far points first, so nearer ones overwrite them (a painter's z-buffer).
+    idx = idx[np.argsort(-cloud.points[idx, 2], kind="stable")]
+    cols = np.clip(px[idx, 0].round().astype(int), 0, width - 1)
+    rows = np.clip(px[idx, 1].round().astype(int), 0, height - 1)
+    image[rows, cols] = colors[labels[idx]]
+    return image, px
+
+
+def save_decomposition_png(path, cloud: PointCloud, labels: np.ndarray, graph: PrimitiveShapeGraph,
+                           title: str = "") -> Path:
+    """Write the labelled cloud with the shape graph drawn over it."""
+    path = Path(path)
+    image, px = label_image(cloud, labels, graph)
+    h, w = image.shape[:2]
+    fig, ax = plt.subplots(figsize=(w / 80, h / 80 + 0.6), dpi=80)
+    ax.imshow(image, interpolation="nearest")
+    centres = []
+    for prim in graph.primitives:
+        members = prim.inliers[np.isfinite(px[prim.inliers]).all(axis=1)]
+        centres.append(np.median(px[members], axis=0) if len(members) else (np.nan, np.nan))
+    centres = np.array(centres).reshape(-1, 2)
+    for i, j in graph.edges:
+        ax.plot(*centres[[i, j]].T, color="black", linewidth=0.8, alpha=0.6)
+    for i, prim in enumerate(graph.primitives):
+        mark = "s" if prim.kind is PrimitiveKind.PLANE else "o"
+        ax.plot(*centres[i], mark, color="white", markeredgecolor="black", markersize=7)
+        ax.annotate(str(i), centres[i], fontsize=7, ha="center", va="center")
+    n_planes = sum(p.kind is PrimitiveKind.PLANE for p in graph.primitives)
+    ax.set_title(title or f"{n_planes} planes (blue-green), {len(graph) - n_planes} cylinders (red), "
+                 f"{len(graph.edges)} graph edges", fontsize=9)
+    ax.set_axis_off()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, bbox_inches="tight")
+    plt.close(fig)
+    return path

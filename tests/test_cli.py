@@ -1,0 +1,43 @@
+"""The psorr command line, run as a user would."""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+
+from psorr import synthetic
+from psorr.io import write_cloud
+
+
+def _run(*args):
+    return subprocess.run([sys.executable, "-m", "psorr.cli", *args], capture_output=True, text=True, timeout=120)
+
+
+def test_decompose_writes_labels_json_and_picture(tmp_path):
+    scene = synthetic.box_on_table(np.random.default_rng(0))
+    cloud_path = tmp_path / "scene.pcd"
+    write_cloud(cloud_path, scene.cloud)
+    out = _run("decompose", str(cloud_path), "--out", str(tmp_path / "labels.npy"), "--json",
+               "--png", str(tmp_path / "pic.png"))
+    assert out.returncode == 0, out.stderr
+    record = json.loads(out.stdout)  # exactly one JSON line on stdout
+    assert set(record) == {"primitives", "edges", "stats"}
+    assert record["stats"]["total_ms"] > 0
+    first = record["primitives"][0]
+    assert set(first) >= {"id", "kind", "params", "n_points", "centroid"}
+    labels = np.load(tmp_path / "labels.npy")
+    assert labels.dtype == np.int64 and labels.shape == (len(scene.cloud),)
+    assert (labels[~scene.cloud.valid_mask] == -1).all()
+    assert labels.max() == len(record["primitives"]) - 1
+    assert (tmp_path / "pic.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_bad_file_gives_one_line_error_not_a_traceback(tmp_path):
+    bad = tmp_path / "broken.pcd"
+    bad.write_text("this is not a PCD file\n")
+    out = _run("decompose", str(bad))
+    assert out.returncode == 2
+    assert "broken.pcd" in out.stderr and "Traceback" not in out.stderr
+    missing = _run("decompose", str(tmp_path / "nowhere.ply"))
+    assert missing.returncode == 2 and "nowhere.ply" in missing.stderr
