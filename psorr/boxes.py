@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
+from psorr.columns import column_max, column_min
 from psorr.types import OrientedBox
 
 
@@ -57,5 +58,5 @@ def box_around_axis(points: np.ndarray, axis: np.ndarray, hull_points: np.ndarra
     c, s = np.cos(angle), np.sin(angle)
     frame = np.column_stack([c * u + s * v, -s * u + c * v, axis])
     local = points @ frame
-    lo, hi = local.min(axis=0), local.max(axis=0)
+    lo, hi = column_min(local), column_max(local)
     return OrientedBox(frame @ ((lo + hi) / 2), frame, hi - lo)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from psorr.columns import column_mean
 from psorr.types import PrimitiveKind
 
 _EPS = 1e-12
@@ -65,7 +66,7 @@ def support_counts(kind: PrimitiveKind, params: np.ndarray, points, normals, thr
 def fit_plane(points: np.ndarray) -> tuple[float, ...]:
     """Least-squares plane through (N, 3) points, normal oriented towards the
     sensor at the origin, so that d > 0 for a plane in front of it."""
-    centroid = points.mean(axis=0)
+    centroid = column_mean(points)
     centred = points - centroid
     _, vecs = np.linalg.eigh(centred.T @ centred)
     normal = vecs[:, 0]
@@ -79,13 +80,14 @@ def _circle_about(points: np.ndarray, axis: np.ndarray):
     (centre (3,), radius, rms residual) or None."""
     u = _unit(np.cross(axis, [1.0, 0.0, 0.0] if abs(axis[0]) < 0.9 else [0.0, 1.0, 0.0]))
     v = np.cross(axis, u)
-    centroid = points.mean(axis=0)
+    centroid = column_mean(points)
     rel = points - centroid
     x, y = rel @ u, rel @ v
-    # x^2 + y^2 = 2ax + 2by + c is linear in (a, b, c).
+    # x^2 + y^2 = 2ax + 2by + c is linear in (a, b, c); the 3x3 normal
+    # equations are plenty accurate for centred points and much faster than lstsq.
     design = np.column_stack([2 * x, 2 * y, np.ones_like(x)])
     try:
-        (a, b, c), *_ = np.linalg.lstsq(design, x**2 + y**2, rcond=None)
+        a, b, c = np.linalg.solve(design.T @ design, design.T @ (x**2 + y**2))
     except np.linalg.LinAlgError:
         return None
     r2 = c + a * a + b * b
@@ -148,7 +150,7 @@ def refine_cylinder(points: np.ndarray, params, max_points: int = 3000, rng=None
     if not np.isfinite(result.x).all() or radius <= 0:
         return tuple(float(x) for x in p0)
     # Keep the axis point level with the points' centroid, as fit_cylinder does.
-    centre = centre + ((points.mean(axis=0) - centre) @ axis) * axis
+    centre = centre + ((column_mean(points) - centre) @ axis) * axis
     return (*centre, *axis, float(abs(radius)))
 
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from enum import StrEnum
+from functools import cached_property
 
 import numpy as np
 
@@ -79,10 +80,14 @@ class PointCloud:
     def is_organised(self) -> bool:
         return self.width is not None
 
-    @property
+    @cached_property
     def valid_mask(self) -> np.ndarray:
-        """(N,) bool: True where the point is finite."""
-        return np.isfinite(self.points).all(axis=1)
+        """(N,) bool: True where the point is finite (computed once; read-only)."""
+        # Per column: np.isfinite(points).all(axis=1) is several times slower on (N, 3).
+        p = self.points
+        mask = np.isfinite(p[:, 0]) & np.isfinite(p[:, 1]) & np.isfinite(p[:, 2])
+        mask.setflags(write=False)
+        return mask
 
 
 class PrimitiveKind(StrEnum):

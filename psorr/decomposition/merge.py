@@ -39,12 +39,21 @@ def adjacent_pairs(labels, edge_i, edge_j, edge_len, max_gap) -> set[tuple[int, 
     return set(zip(lo.tolist(), hi.tolist()))
 
 
+_SCREEN_POINTS = 300
+
+
 def _best_merge(pa: Piece, pb: Piece, vox, threshold, cos_max, n_points, k, max_radius):
     union = np.concatenate([pa.members, pb.members])
     pts, nrm, thr = vox.points[union], vox.normals[union], threshold[union]
+    # An evenly strided subset screens out hopeless unions (a table and a box
+    # side) before any fit on every point.
+    screen = slice(None, None, max(1, len(union) // _SCREEN_POINTS))
     best = None
     # Both kinds, always: two planes that tile a small boss are one cylinder.
     for kind in PrimitiveKind:
+        rough = shapes.fit(kind, pts[screen], nrm[screen], max_radius=max_radius)
+        if rough is None or support_mask(kind, rough, pts[screen], nrm[screen], thr[screen], cos_max).mean() < 0.7:
+            continue
         params = shapes.fit(kind, pts, nrm, max_radius=max_radius)
         if params is None:
             continue

@@ -11,6 +11,7 @@ from scipy.sparse.csgraph import connected_components
 
 from psorr import shapes
 from psorr.boxes import box_around_axis
+from psorr.columns import column_mean
 from psorr.decomposition.graphcut import alpha_expansion
 from psorr.decomposition.hypotheses import generate_hypotheses, support_mask
 from psorr.decomposition.merge import Piece, merge_greedy
@@ -29,7 +30,7 @@ class DecomposeParams:
     multiples of the Kinect depth sigma at each point's depth.
     """
 
-    voxel_size: float = 0.01
+    voxel_size: float = 0.012
     k_neighbours: int = 8
     sensor_noise: bool = True          # False: one threshold for all depths (CAD samples)
     inlier_sigmas: float = 2.5         # inlier distance = max(min_inlier_distance, this x sigma(z))
@@ -45,7 +46,7 @@ class DecomposeParams:
     max_primitives: int = 64
     null_cost: float = 4.0             # data cost of "no primitive", in squared inlier distances
     max_distance_ratio: float = 2.5    # a label is forbidden beyond this many inlier distances
-    smoothness: float = 0.5            # Potts weight of a neighbour pair one voxel apart
+    smoothness: float = 0.35           # Potts weight of a neighbour pair one voxel apart
     max_passes: int = 3
     adjacency_gap: float = 2.5         # in voxels: closer inliers make primitives neighbours
     mdl_k: float = 2.5e-4              # K of equation 1, per descriptor parameter
@@ -176,21 +177,30 @@ def _assign(vox: Voxelized, hypotheses, claimed, threshold, edges, params, rng) 
 
 
 def best_fitting_kind(points, normals, threshold, params, preferred=None):
-    """(kind, shape params, support count) of the shape that explains most of
-    the oriented points; a plane wins ties, having fewer parameters."""
+    """(kind, shape params, support count) of the shape that explains the
+    oriented points best, or None. A cylinder has three more parameters and
+    can imitate a plane with a huge radius, so it must explain clearly more
+    (5 %) than the plane does; `preferred` breaks exact ties."""
     cos_max = np.cos(np.radians(params.max_normal_angle_deg))
-    best = None
+    fits = {}
     for kind in PrimitiveKind:
         if kind is PrimitiveKind.CYLINDER and not params.cylinders:
             continue
+        if kind is PrimitiveKind.CYLINDER and PrimitiveKind.PLANE in fits and \
+                fits[PrimitiveKind.PLANE][1] >= 0.97 * len(points):
+            continue  # a plane that explains (nearly) everything wins anyway
         fitted = shapes.fit(kind, points, normals, max_radius=params.cylinder_radius_range[1])
-        if fitted is None:
-            continue
-        support = int(support_mask(kind, fitted, points, normals, threshold, cos_max).sum())
-        bonus = 1 if kind is preferred else 0  # keep the hypothesis' kind on an exact tie
-        if best is None or (support, -kind.n_params, bonus) > (best[2], -best[0].n_params, best[3]):
-            best = (kind, fitted, support, bonus)
-    return None if best is None else best[:3]
+        if fitted is not None:
+            fits[kind] = (fitted, int(support_mask(kind, fitted, points, normals, threshold, cos_max).sum()))
+    if not fits:
+        return None
+    plane, cylinder = fits.get(PrimitiveKind.PLANE), fits.get(PrimitiveKind.CYLINDER)
+    if plane and cylinder:
+        margin = 1.05 if preferred is not PrimitiveKind.CYLINDER else 1.0
+        kind = PrimitiveKind.CYLINDER if cylinder[1] > margin * plane[1] else PrimitiveKind.PLANE
+    else:
+        kind = PrimitiveKind.PLANE if plane else PrimitiveKind.CYLINDER
+    return kind, fits[kind][0], fits[kind][1]
 
 
 def _split_components(labels, hypotheses, vox, threshold, edges, params) -> dict[int, Piece]:
@@ -223,6 +233,9 @@ def _split_components(labels, hypotheses, vox, threshold, edges, params) -> dict
     return pieces
 
 
+_MAX_FIT_POINTS = 20_000
+
+
 def _finalise(cloud, vox, pieces, labels, edges, params):
     """Map voxel labels back to every input point, keep the points the shape
     explains, refit on them, and build the primitive shape graph."""
@@ -240,17 +253,22 @@ def _finalise(cloud, vox, pieces, labels, edges, params):
         keep = shapes.distances(piece.kind, piece.params, pts) < params.point_check * inlier_threshold(pts, params)
         point_labels[idx[~keep]] = -1
         idx, pts = idx[keep], pts[keep]
-        refit = None
+        refit, kind = None, piece.kind
         if len(idx) >= 6:
-            refit = shapes.fit(piece.kind, pts, vox.normals[vox.voxel_of[idx]], refine=True,
-                               max_radius=params.cylinder_radius_range[1])
+            # An evenly strided 20k points pin a shape down as well as 200k do.
+            sub = slice(None, None, max(1, len(idx) // _MAX_FIT_POINTS))
+            normals = vox.normals[vox.voxel_of[idx[sub]]]
+            refit = shapes.fit(kind, pts[sub], normals, refine=True, max_radius=params.cylinder_radius_range[1])
+            if refit is None and kind is PrimitiveKind.CYLINDER:
+                # Refined out of the radius range: the patch is flat after all.
+                kind, refit = PrimitiveKind.PLANE, shapes.fit_plane(pts[sub])
         if len(idx) < params.min_points or refit is None:
             point_labels[idx] = -1
             continue
-        axis = np.asarray(refit[:3] if piece.kind is PrimitiveKind.PLANE else refit[3:6])
+        axis = np.asarray(refit[:3] if kind is PrimitiveKind.PLANE else refit[3:6])
         box = box_around_axis(pts, axis, hull_points=vox.points[piece.members])
         remap[pid] = len(primitives)
-        primitives.append(Primitive(piece.kind, refit, idx, pts.mean(axis=0), box))
+        primitives.append(Primitive(kind, refit, idx, column_mean(pts), box))
     lookup = np.full(max(pieces, default=-1) + 2, -1, dtype=np.int64)
     for pid, new in remap.items():
         lookup[pid] = new

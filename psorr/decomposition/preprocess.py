@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
+from psorr.columns import column_max, column_min
 from psorr.errors import InvalidInputError
 from psorr.types import PointCloud
 
@@ -44,8 +45,8 @@ _DENSE_GRID_CELLS = 8_000_000  # a table-top scene at 1 cm needs well under 1M
 def voxel_downsample(points: np.ndarray, voxel_size: float) -> tuple[np.ndarray, np.ndarray]:
     """Average (N, 3) finite points per voxel. Returns (centroids (M, 3), voxel_of (N,))."""
     keys = np.floor(points / voxel_size).astype(np.int64)
-    keys -= keys.min(axis=0)
-    dims = keys.max(axis=0) + 1
+    keys -= column_min(keys)
+    dims = column_max(keys) + 1
     flat = (keys[:, 0] * dims[1] + keys[:, 1]) * dims[2] + keys[:, 2]
     n_cells = int(np.prod(dims))
     if n_cells <= _DENSE_GRID_CELLS:

@@ -1,0 +1,40 @@
+"""Seeded scenes of CAD workpieces."""
+
+import numpy as np
+import pytest
+
+from psorr.errors import InvalidInputError
+from psorr.scenes import workpiece_scene
+from psorr.workpieces import load_catalog
+
+PARTS = ["transformer", "flanged_hub", "u_channel"]
+
+
+@pytest.fixture(scope="module")
+def meshes():
+    catalog = load_catalog()
+    return {name: catalog[name].load_mesh() for name in PARTS}
+
+
+def test_instances_are_visible_where_their_pose_says(meshes):
+    scene = workpiece_scene(np.random.default_rng(1), meshes, PARTS, noise=None)
+    labels = scene.cloud.labels
+    assert set(np.unique(labels)) <= {-1, 0, 1, 2, 3}
+    for k, inst in enumerate(scene.instances, start=1):
+        pts = scene.cloud.points[labels == k]
+        assert len(pts) > 500, f"{inst.name} barely visible"
+        # Noise-free points of an instance lie on its mesh placed at T_camera_model.
+        local = (pts - inst.T_camera_model[:3, 3]) @ inst.T_camera_model[:3, :3]
+        _, dist, _ = meshes[inst.name].nearest.on_surface(local[::50])
+        assert dist.max() < 1e-4
+
+
+def test_same_seed_same_cloud(meshes):
+    a = workpiece_scene(np.random.default_rng(4), meshes, PARTS)
+    b = workpiece_scene(np.random.default_rng(4), meshes, PARTS)
+    assert np.array_equal(a.cloud.points, b.cloud.points, equal_nan=True)
+
+
+def test_unknown_part_names_the_choices(meshes):
+    with pytest.raises(InvalidInputError, match="choose from"):
+        workpiece_scene(np.random.default_rng(0), meshes, ["gearbox"])
