@@ -1,0 +1,269 @@
+"""Training from CAD: a library of models, each a surface sample with its
+primitive shape graph, and one hash table of oriented point pairs drawn from
+every pair of distinct primitives (the paper samples pairs this way so that a
+partial view still finds its pairs).
+
+A library saves to one .npz file. Training is cached under the user's cache
+directory, keyed by a hash of the mesh bytes, units and training settings.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import sys
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+import trimesh
+
+from psorr.decomposition import DecomposeParams, decompose
+from psorr.errors import CloudFileError, InvalidInputError
+from psorr.io import read_mesh
+from psorr.ppf import HashParams, PairTable
+from psorr.types import OrientedBox, PointCloud, Primitive, PrimitiveKind, PrimitiveShapeGraph
+
+FORMAT_VERSION = 1
+MESH_SUFFIXES = (".stl", ".obj", ".ply")
+UNITS = {"m": 1.0, "mm": 0.001}
+
+
+def cache_dir() -> Path:
+    """$PSORR_CACHE, else $XDG_CACHE_HOME/psorr, else ~/.cache/psorr."""
+    if os.environ.get("PSORR_CACHE"):
+        return Path(os.environ["PSORR_CACHE"])
+    return Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "psorr"
+
+
+@dataclass(frozen=True)
+class TrainParams:
+    """Training settings. Distances in metres."""
+
+    sample_spacing: float = 0.002        # surface samples every ~2 mm
+    pair_points: int = 16                # oriented points drawn per primitive for the pair table
+    min_primitive_area: float = 4e-4     # 4 cm^2: smaller faces are below a Kinect's resolution
+    seed: int = 0
+    hash: HashParams = field(default_factory=HashParams)
+    decompose: DecomposeParams = field(default_factory=lambda: DecomposeParams(
+        sensor_noise=False, voxel_size=0.003, min_inlier_distance=0.0008, min_points=8,
+        cylinder_radius_range=(0.003, 0.2), k_neighbours=10))
+
+    def fingerprint(self) -> str:
+        return json.dumps(asdict(self), sort_keys=True, default=str)
+
+
+@dataclass(frozen=True, eq=False)
+class Model:
+    """One trained workpiece, all in its model frame (metres).
+
+    Attributes:
+        name: the mesh file stem; points, normals: (S, 3) even surface samples;
+        graph: the model's primitive shape graph (inliers index `points`);
+        diameter: largest distance between two samples; mesh_sha256: of the mesh bytes.
+    """
+
+    name: str
+    points: np.ndarray
+    normals: np.ndarray
+    graph: PrimitiveShapeGraph
+    diameter: float
+    mesh_sha256: str
+
+
+def load_mesh_in_metres(path, units: str | None = None) -> trimesh.Trimesh:
+    """Read a mesh and scale it to metres. Without `units`, a mesh whose extent
+    is above 2 m or below 5 mm is refused: it is almost surely in other units."""
+    path = Path(path)
+    if units is not None and units not in UNITS:
+        raise InvalidInputError(f"units must be one of {sorted(UNITS)}, got {units!r}")
+    mesh = read_mesh(path)
+    extent = float(np.max(mesh.extents))
+    if units is None and not 0.005 <= extent <= 2.0:
+        raise CloudFileError(path, f"the mesh is {extent:.4g} units across, not a plausible size in metres",
+                             "pass --units mm (or units='mm') if it is in millimetres, or --units m to insist")
+    return mesh.apply_scale(UNITS[units or "m"])
+
+
+def train_model(name: str, mesh: trimesh.Trimesh, params: TrainParams, sha: str = "") -> Model:
+    """Sample, decompose and describe one mesh (already in metres)."""
+    rng = np.random.default_rng(params.seed)
+    count = max(2000, int(mesh.area / params.sample_spacing**2))
+    points, faces = trimesh.sample.sample_surface(mesh, count, seed=int(rng.integers(2**31)))
+    normals = mesh.face_normals[faces]
+    result = decompose(PointCloud(points, normals=normals), params.decompose, rng)
+    hull = trimesh.convex.convex_hull(points[::max(1, len(points) // 4000)])
+    diameter = float(np.max(np.linalg.norm(hull.vertices[:, None] - hull.vertices[None], axis=2)))
+    return Model(name, np.asarray(points), np.asarray(normals), result.graph, diameter, sha)
+
+
+def _oriented_points(model: Model, params: TrainParams, rng) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Oriented points per usable primitive: plane samples with the plane's
+    normal; cylinder samples dropped onto the axis, with the axis both ways
+    (a scene cannot tell which way an axis points). Returns points, normals, primitive."""
+    spacing2 = params.sample_spacing**2
+    pts, nrm, prim = [], [], []
+    for index, primitive in enumerate(model.graph.primitives):
+        if primitive.n_points * spacing2 < params.min_primitive_area:
+            continue
+        chosen = rng.choice(primitive.inliers, size=min(params.pair_points, primitive.n_points), replace=False)
+        p = model.points[chosen]
+        if primitive.kind is PrimitiveKind.PLANE:
+            pts.append(p)
+            nrm.append(np.broadcast_to(primitive.normal, p.shape))
+            prim.append(np.full(len(p), index))
+        else:
+            axis, origin = primitive.axis, primitive.axis_point
+            on_axis = origin + np.outer((p - origin) @ axis, axis)
+            for sign in (1.0, -1.0):
+                pts.append(on_axis)
+                nrm.append(np.broadcast_to(sign * axis, p.shape))
+                prim.append(np.full(len(p), index))
+    if not pts:
+        return np.empty((0, 3)), np.empty((0, 3)), np.empty(0, dtype=np.int64)
+    return np.vstack(pts), np.vstack(nrm), np.concatenate(prim)
+
+
+class ModelLibrary:
+    """Trained models and the shared pair table. Build with from_meshes() or load()."""
+
+    def __init__(self, models: list[Model], table: PairTable, params: TrainParams, train_ms: float = 0.0):
+        if not models:
+            raise InvalidInputError("a ModelLibrary needs at least one model")
+        names = [m.name for m in models]
+        if len(set(names)) != len(names):
+            raise InvalidInputError(f"model names must be unique, got {names}")
+        self.models, self.table, self.params, self.train_ms = tuple(models), table, params, train_ms
+
+    @property
+    def names(self) -> list[str]:
+        return [m.name for m in self.models]
+
+    def __len__(self) -> int:
+        return len(self.models)
+
+    def model(self, name: str) -> Model:
+        for m in self.models:
+            if m.name == name:
+                return m
+        raise InvalidInputError(f"no model {name!r} in the library; it has {self.names}")
+
+    @classmethod
+    def build(cls, models: list[Model], params: TrainParams, train_ms: float = 0.0) -> ModelLibrary:
+        rng = np.random.default_rng(params.seed)
+        pts, nrm, owner, firsts, seconds, offset = [], [], [], [], [], 0
+        for index, model in enumerate(models):
+            p, n, prim = _oriented_points(model, params, rng)
+            a, b = np.meshgrid(np.arange(len(p)), np.arange(len(p)), indexing="ij")
+            distinct = prim[a] != prim[b]  # pairs from two different primitives only
+            firsts.append(a[distinct] + offset)
+            seconds.append(b[distinct] + offset)
+            pts.append(p)
+            nrm.append(n)
+            owner.append(np.full(len(p), index))
+            offset += len(p)
+        table = PairTable.build(params.hash, np.vstack(pts), np.vstack(nrm), np.concatenate(owner),
+                                np.concatenate(firsts), np.concatenate(seconds))
+        return cls(models, table, params, train_ms)
+
+    @classmethod
+    def from_meshes(cls, paths, units: str | None = None, params: TrainParams | None = None,
+                    use_cache: bool = True, progress=None) -> ModelLibrary:
+        """Train from mesh files (.stl/.obj/.ply); each model is named by its file stem."""
+        params = params or TrainParams()
+        paths = [Path(p) for p in paths]
+        if not paths:
+            raise InvalidInputError(f"no mesh files given; pass {', '.join(MESH_SUFFIXES)} files or a folder of them")
+        start = time.perf_counter()
+        models = []
+        for path in (progress(paths) if progress else paths):
+            if not path.is_file():
+                raise CloudFileError(path, "no such mesh file", "check the path")
+            sha = hashlib.sha256(path.read_bytes()).hexdigest()
+            key = hashlib.sha256(f"{sha}|{units}|{params.fingerprint()}|{FORMAT_VERSION}".encode()).hexdigest()[:24]
+            cached = cache_dir() / f"{path.stem}-{key}.npz"
+            if use_cache and cached.is_file():
+                try:
+                    models.append(_load_models(cached)[0])
+                    continue
+                except Exception:  # noqa: BLE001  a stale or torn cache entry is retrained, not fatal
+                    pass
+            model = train_model(path.stem, load_mesh_in_metres(path, units), params, sha)
+            models.append(model)
+            if use_cache:
+                _save_models(cached, [model])
+        return cls.build(models, params, (time.perf_counter() - start) * 1e3)
+
+    def save(self, path) -> Path:
+        return _save_models(Path(path), list(self.models), self.params)
+
+    @classmethod
+    def load(cls, path, params: TrainParams | None = None) -> ModelLibrary:
+        path = Path(path)
+        start = time.perf_counter()
+        models = _load_models(path)
+        return cls.build(models, params or TrainParams(), (time.perf_counter() - start) * 1e3)
+
+
+def _save_models(path: Path, models: list[Model], params: TrainParams | None = None) -> Path:
+    arrays, meta = {}, {"format": FORMAT_VERSION, "models": []}
+    for i, m in enumerate(models):
+        prims = m.graph.primitives
+        arrays[f"m{i}_points"], arrays[f"m{i}_normals"] = m.points, m.normals
+        for j, p in enumerate(prims):
+            arrays[f"m{i}_p{j}_inliers"] = p.inliers
+        meta["models"].append({
+            "name": m.name, "diameter": m.diameter, "sha256": m.mesh_sha256, "edges": [list(e) for e in m.graph.edges],
+            "primitives": [{"kind": p.kind.value, "params": list(p.params), "centroid": p.centroid.tolist(),
+                            "box": [p.box.center.tolist(), p.box.rotation.tolist(), p.box.extent.tolist()]}
+                           for p in prims]})
+    arrays["meta"] = np.frombuffer(json.dumps(meta).encode(), dtype=np.uint8)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".tmp.npz")
+    np.savez_compressed(tmp, **arrays)
+    tmp.replace(path)  # atomic, so a crash never leaves a torn library
+    return path
+
+
+def _load_models(path: Path) -> list[Model]:
+    try:
+        with np.load(path) as data:
+            meta = json.loads(bytes(data["meta"]).decode())
+            if meta.get("format") != FORMAT_VERSION:
+                raise CloudFileError(path, f"library format {meta.get('format')}, this psorr reads {FORMAT_VERSION}",
+                                     "retrain it from the meshes")
+            models = []
+            for i, m in enumerate(meta["models"]):
+                prims = tuple(
+                    Primitive(PrimitiveKind(p["kind"]), tuple(p["params"]), data[f"m{i}_p{j}_inliers"],
+                              np.array(p["centroid"]), OrientedBox(*(np.array(b) for b in p["box"])))
+                    for j, p in enumerate(m["primitives"]))
+                graph = PrimitiveShapeGraph(prims, tuple(tuple(e) for e in m["edges"]))
+                models.append(Model(m["name"], data[f"m{i}_points"], data[f"m{i}_normals"], graph,
+                                    float(m["diameter"]), m["sha256"]))
+            return models
+    except CloudFileError:
+        raise
+    except (OSError, ValueError, KeyError, json.JSONDecodeError) as exc:
+        raise CloudFileError(path, f"not a psorr model library ({exc.__class__.__name__}: {exc})",
+                             "pass mesh files, or a library written by ModelLibrary.save") from None
+
+
+def library_from_arguments(items, units: str | None = None, progress=None) -> ModelLibrary:
+    """MODELS as the CLI takes it: a folder of meshes, mesh files, or one saved library (.npz)."""
+    paths = [Path(i) for i in items]
+    if len(paths) == 1 and paths[0].suffix.lower() == ".npz":
+        return ModelLibrary.load(paths[0])
+    meshes = []
+    for p in paths:
+        if p.is_dir():
+            found = sorted(f for f in p.iterdir() if f.suffix.lower() in MESH_SUFFIXES)
+            if not found:
+                raise CloudFileError(p, f"the folder holds no {'/'.join(MESH_SUFFIXES)} meshes", "point at the meshes")
+            meshes += found
+        else:
+            meshes.append(p)
+    print(f"training on {len(meshes)} meshes (cached in {cache_dir()})", file=sys.stderr)
+    return ModelLibrary.from_meshes(meshes, units=units, progress=progress)

@@ -1,0 +1,74 @@
+"""Training from CAD: point-pair features, the library file and its cache, units."""
+
+import numpy as np
+import pytest
+import trimesh
+from scipy.spatial.transform import Rotation
+
+from psorr import library as library_module
+from psorr.errors import CloudFileError
+from psorr.library import ModelLibrary, load_mesh_in_metres
+from psorr.ppf import HashParams, PairTable, invert_rigid, pair_frames
+from psorr.workpieces import DEFAULT_CATALOG
+
+MESHES = DEFAULT_CATALOG.parent / "meshes"
+
+
+@pytest.fixture(autouse=True)
+def private_cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("PSORR_CACHE", str(tmp_path / "cache"))
+
+
+def test_a_matched_pair_gives_the_exact_rigid_motion():
+    rng = np.random.default_rng(0)
+    p1, p2 = rng.normal(size=(20, 3)), rng.normal(size=(20, 3))
+    n1 = rng.normal(size=(20, 3))
+    n1 /= np.linalg.norm(n1, axis=1, keepdims=True)
+    n2 = rng.normal(size=(20, 3))
+    n2 /= np.linalg.norm(n2, axis=1, keepdims=True)
+    points, normals = np.vstack([p1, p2]), np.vstack([n1, n2])
+    table = PairTable.build(HashParams(), points, normals, np.zeros(40), np.arange(20), np.arange(20, 40))
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = Rotation.random(random_state=1).as_matrix(), (0.3, -0.2, 1.0)
+    moved = lambda x: x @ T[:3, :3].T  # noqa: E731
+    s, rows = table.lookup(moved(p1) + T[:3, 3], moved(n1), moved(p2) + T[:3, 3], moved(n2))
+    own = s == table.first[rows]  # each scene pair against its own model pair
+    assert own.sum() == 20
+    poses, _ = table.poses(s[own], rows[own], moved(p1) + T[:3, 3], moved(n1), moved(p2) + T[:3, 3])
+    assert np.allclose(poses, T, atol=1e-9)
+    frames = pair_frames(p1, n1, p2)
+    assert np.allclose(frames @ invert_rigid(frames), np.eye(4), atol=1e-12)
+
+
+def test_library_saves_loads_and_caches(tmp_path, monkeypatch):
+    paths = [MESHES / "flanged_hub.stl", MESHES / "u_channel.stl"]
+    lib = ModelLibrary.from_meshes(paths)
+    assert lib.names == ["flanged_hub", "u_channel"] and len(lib.table) > 1000
+    assert [p.kind.value for p in lib.model("flanged_hub").graph.primitives].count("cylinder") >= 3
+    saved = lib.save(tmp_path / "lib.npz")
+    again = ModelLibrary.load(saved)
+    assert again.names == lib.names and len(again.table) == len(lib.table)
+    assert np.array_equal(again.model("u_channel").points, lib.model("u_channel").points)
+
+    def no_training(*args, **kwargs):
+        raise AssertionError("a cached model was trained again")
+
+    monkeypatch.setattr(library_module, "train_model", no_training)
+    cached = ModelLibrary.from_meshes(paths)
+    assert np.array_equal(cached.table.keys, lib.table.keys)
+
+
+def test_implausible_size_needs_units(tmp_path):
+    mesh = trimesh.creation.box(extents=(100.0, 60.0, 40.0))  # millimetres
+    path = tmp_path / "block.stl"
+    mesh.export(path)
+    with pytest.raises(CloudFileError, match="block.stl.*--units mm"):
+        load_mesh_in_metres(path)
+    assert np.allclose(load_mesh_in_metres(path, "mm").extents, (0.1, 0.06, 0.04))
+
+
+def test_not_a_library_is_a_clear_error(tmp_path):
+    bad = tmp_path / "models.npz"
+    bad.write_bytes(b"nonsense")
+    with pytest.raises(CloudFileError, match="models.npz"):
+        ModelLibrary.load(bad)
