@@ -62,6 +62,42 @@ def _decompose(args) -> int:
     return 0
 
 
+def _recognize(args) -> int:
+    from tqdm import tqdm
+
+    from psorr.io import read_cloud
+    from psorr.library import library_from_arguments
+    from psorr.recognize import Recognizer
+
+    library = library_from_arguments(args.models, units=args.units,
+                                     progress=lambda xs: tqdm(xs, desc="training", file=sys.stderr))
+    cloud = read_cloud(args.scene)
+    _log(f"read {args.scene}: {len(cloud)} points; models {', '.join(library.names)}")
+    result = Recognizer(library, method=args.method).recognize(cloud, np.random.default_rng(args.seed))
+    stats = result.stats
+    if args.png:
+        from psorr.render import save_detections_png
+
+        save_detections_png(args.png, cloud, result.detections, library)
+        _log(f"wrote overlay to {args.png}")
+    if args.json:
+        print(json.dumps({
+            "detections": [{"model": d.model, "pose": [[float(v) for v in row] for row in d.T_cloud_model],
+                            "score": float(d.score)} for d in result.detections],
+            "stats": {"method": stats.method, "hypotheses": int(stats.hypotheses),
+                      "verify_ms_per_hypothesis": float(stats.verify_ms_per_hypothesis),
+                      "total_ms": float(stats.total_ms), "train_ms": float(stats.train_ms)},
+        }))
+    else:
+        print(f"{'model':<16} {'score':>6} {'seen':>5}  position (m)")
+        for d in result.detections:
+            where = " ".join(f"{v:+.3f}" for v in d.T_cloud_model[:3, 3])
+            print(f"{d.model:<16} {d.score:>6.3f} {d.visible_fraction:>5.2f}  {where}")
+        print(f"{len(result.detections)} detections; {stats.method}: {stats.hypotheses} hypotheses, "
+              f"{stats.verify_ms_per_hypothesis:.2f} ms verification each, {stats.total_ms:.0f} ms in all")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="psorr", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
@@ -73,6 +109,18 @@ def build_parser() -> argparse.ArgumentParser:
     dec.add_argument("--voxel-size", type=float, default=None, help="working resolution in metres (default 0.01)")
     dec.add_argument("--seed", type=int, default=0, help="seed of the RANSAC sampling (default 0)")
     dec.set_defaults(run=_decompose)
+    rec = sub.add_parser("recognize", help="find CAD-trained workpieces and their poses in a depth cloud")
+    rec.add_argument("models", nargs="+", metavar="MODELS",
+                     help="a folder of meshes (.stl/.obj/.ply), mesh files, or a saved library (.npz); "
+                          "each model is named by its file stem")
+    rec.add_argument("scene", metavar="SCENE", help="cloud file in metres, sensor frame, table and all")
+    rec.add_argument("--method", choices=("psorr", "orr"), default="psorr")
+    rec.add_argument("--units", choices=("m", "mm"), default=None,
+                     help="units of the meshes (default m; meshes of implausible size are refused without it)")
+    rec.add_argument("--json", action="store_true", help="print exactly one JSON line to stdout")
+    rec.add_argument("--png", metavar="OVERLAY.png", help="draw the recognised models over the cloud")
+    rec.add_argument("--seed", type=int, default=0)
+    rec.set_defaults(run=_recognize)
     return parser
 
 

@@ -92,3 +92,49 @@ def save_decomposition_png(path, cloud: PointCloud, labels: np.ndarray, graph: P
     fig.savefig(path, bbox_inches="tight")
     plt.close(fig)
     return path
+
+
+def save_detections_png(path, cloud: PointCloud, detections, library) -> Path:
+    """The cloud in grey with each detected model's surface samples drawn in
+    its own colour at the recognised pose, seen from the sensor."""
+    path = Path(path)
+    valid = cloud.valid_mask
+    pts = cloud.points[valid]
+    if cloud.is_organised:
+        rows, cols = np.divmod(np.flatnonzero(valid), cloud.width)
+        w, h = cloud.width, cloud.height
+        f = 525.0
+        # Recover the pinhole from the organised grid, so model points land on their pixels.
+        cx = float(np.median(cols - f * pts[:, 0] / pts[:, 2]))
+        cy = float(np.median(rows - f * pts[:, 1] / pts[:, 2]))
+    else:
+        w, h, f = 640, 480, None
+    if f is None:
+        u, v = _project(pts, w, h)
+    else:
+        u, v = f * pts[:, 0] / pts[:, 2] + cx, f * pts[:, 1] / pts[:, 2] + cy
+    fig, ax = plt.subplots(figsize=(w / 80, h / 80 + 0.6), dpi=80)
+    shade = np.clip(1.2 - pts[:, 2] / max(pts[:, 2].max(), 1e-6), 0.2, 0.9)
+    ax.scatter(u, v, c=shade, cmap="gray", s=0.3, linewidths=0, vmin=0, vmax=1)
+    cmap = plt.get_cmap("tab10")
+    for k, det in enumerate(detections):
+        model = library.model(det.model)
+        mp = model.points[:: max(1, len(model.points) // 3000)]
+        cam = mp @ det.T_cloud_model[:3, :3].T + det.T_cloud_model[:3, 3]
+        if f is None:
+            mu, mv = _project(np.vstack([pts, cam]), w, h)
+            mu, mv = mu[len(pts):], mv[len(pts):]
+        else:
+            mu, mv = f * cam[:, 0] / cam[:, 2] + cx, f * cam[:, 1] / cam[:, 2] + cy
+        ax.scatter(mu, mv, s=1.5, color=cmap(k % 10), linewidths=0, alpha=0.8)
+        ax.annotate(f"{det.model} {det.score:.2f}", (np.median(mu), mv.min()), color=cmap(k % 10), fontsize=8,
+                    ha="center", va="bottom", weight="bold")
+    ax.set_xlim(0, w)
+    ax.set_ylim(h, 0)
+    ax.set_aspect("equal")
+    ax.set_axis_off()
+    ax.set_title(f"{len(detections)} detections", fontsize=9)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, bbox_inches="tight")
+    plt.close(fig)
+    return path

@@ -220,3 +220,36 @@ class PrimitiveShapeGraph:
 
     def neighbours(self, index: int) -> list[int]:
         return sorted({j for i, j in self.edges if i == index} | {i for i, j in self.edges if j == index})
+
+
+@dataclass(frozen=True, eq=False)
+class Detection:
+    """One recognised workpiece instance.
+
+    Attributes:
+        model: the model's name (its mesh file stem).
+        T_cloud_model: (4, 4) pose mapping model coordinates (metres) into the cloud's frame.
+        score: confidence in [0, 1].
+        visible_fraction: the share of the model's surface samples that the
+            sensor saw (in front of nothing, matched by a measured point), in [0, 1].
+    """
+
+    model: str
+    T_cloud_model: np.ndarray
+    score: float
+    visible_fraction: float = 0.0
+
+    def __post_init__(self):
+        pose = np.array(self.T_cloud_model, dtype=np.float64)
+        if pose.shape != (4, 4) or not np.isfinite(pose).all():
+            raise InvalidInputError(f"T_cloud_model must be a finite (4, 4) array, got shape {pose.shape}")
+        if not np.allclose(pose[3], (0, 0, 0, 1)) or not np.allclose(pose[:3, :3] @ pose[:3, :3].T, np.eye(3),
+                                                                     atol=1e-6):
+            raise InvalidInputError("T_cloud_model must be a rigid transform (orthonormal rotation, last row 0 0 0 1)")
+        pose.setflags(write=False)
+        object.__setattr__(self, "T_cloud_model", pose)
+        for name in ("score", "visible_fraction"):
+            value = float(getattr(self, name))
+            if not 0.0 <= value <= 1.0:
+                raise InvalidInputError(f"Detection.{name} must lie in [0, 1], got {value}")
+            object.__setattr__(self, name, value)

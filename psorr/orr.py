@@ -1,0 +1,52 @@
+"""ORR hypotheses (Papazov and Burschka 2010): random oriented scene point
+pairs looked up in the same hash table, each pose screened point by point."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import open3d as o3d
+
+from psorr.verify import check_pose
+
+
+def orr_hypotheses(recognizer, cloud, view, rng):
+    """(candidates [(model index, T)], hypotheses checked, total check ms)."""
+    p, library = recognizer.params, recognizer.library
+    # Oriented scene points: the view's ICP copy already carries normals facing the sensor.
+    pts = np.asarray(view.icp_target.points)
+    nrm = np.asarray(view.icp_target.normals)
+    tree = o3d.geometry.KDTreeFlann(view.icp_target)
+    diameters = np.array([m.diameter for m in library.models])
+    checked, elapsed, scored = 0, 0.0, []
+    attempts = 0
+    while checked < p.orr_hypotheses and attempts < 20 * p.orr_hypotheses:
+        attempts += 1
+        a = int(rng.integers(len(pts)))
+        # Papazov draws the second point at a fixed distance from the first: a
+        # share of the model size, so both points often lie on one object.
+        radius = float(rng.uniform(0.3, 0.8) * np.median(diameters))
+        _, idx, _ = tree.search_radius_vector_3d(pts[a], radius)
+        idx = np.asarray(idx)
+        if len(idx) < 2:
+            continue
+        far = idx[np.linalg.norm(pts[idx] - pts[a], axis=1) > 0.6 * radius]
+        if len(far) == 0:
+            continue
+        b = int(rng.choice(far))
+        s, rows = library.table.lookup(pts[[a]], nrm[[a]], pts[[b]], nrm[[b]])
+        if len(rows) == 0:
+            continue
+        pick = rng.choice(len(rows), size=min(len(rows), 4), replace=False)
+        poses, models = library.table.poses(s[pick], rows[pick], pts[[a]], nrm[[a]], pts[[b]])
+        for T, m in zip(poses, models):
+            model = library.models[m]
+            start = time.perf_counter()
+            check = check_pose(view, model.points, model.normals, T, p.check)
+            elapsed += (time.perf_counter() - start) * 1e3
+            checked += 1
+            if check.n_support >= p.min_support // 2:
+                scored.append((check.score, int(m), T))
+    scored.sort(key=lambda s: -s[0])
+    return [(m, T) for _, m, T in scored[: p.refine_top]], checked, elapsed

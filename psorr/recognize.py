@@ -1,0 +1,191 @@
+"""Recognition: PSORR over primitive pairs, or the ORR baseline over raw points.
+
+Both methods share the model library, the acceptance stage (point-to-plane
+ICP, the point-level check, and suppression of detections that explain the
+same pixels) and the stats. They differ in where hypotheses come from and
+how each is screened:
+- PSORR pairs plane centroids and cylinder axes of the decomposed scene,
+  clusters the poses by vote, and screens each by intersecting model and
+  scene primitive boxes (section 2.1.4).
+- ORR (Papazov and Burschka) pairs random oriented scene points and screens
+  every hypothesis with the point-level check.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from psorr.box_overlap import boxes_to_arrays, intersection_ratio, overlap_candidates, transform_box
+from psorr.decomposition import DecomposeParams, decompose
+from psorr.errors import InvalidInputError
+from psorr.library import ModelLibrary
+from psorr.orr import orr_hypotheses
+from psorr.types import Detection, PointCloud, PrimitiveKind
+from psorr.verify import CheckParams, SceneView, check_pose, refine_icp
+
+METHODS = ("psorr", "orr")
+
+
+@dataclass(frozen=True)
+class RecognizeParams:
+    """Settings of recognition; distances in metres."""
+
+    decompose: DecomposeParams = field(default_factory=lambda: DecomposeParams(voxel_size=0.008))
+    max_hypotheses: int = 100           # PSORR: clustered hypotheses screened by boxes
+    cluster_cell: float = 0.02          # PSORR: position grid of the vote clustering
+    min_box_score: float = 0.1
+    refine_top: int = 24                # best screened hypotheses that get ICP and the point check
+    orr_hypotheses: int = 1500          # ORR: hypotheses drawn and checked point by point
+    icp_distance: float = 0.012
+    check: CheckParams = field(default_factory=CheckParams)
+    min_visible_fraction: float = 0.35
+    max_violation_ratio: float = 0.15
+    min_support: int = 60
+    max_shared_pixels: float = 0.3      # a detection sharing more of its pixels with a better one is dropped
+
+
+@dataclass(frozen=True)
+class RecognitionStats:
+    method: str
+    hypotheses: int
+    verify_ms_per_hypothesis: float
+    decomposition_ms: float
+    total_ms: float
+    train_ms: float
+
+
+@dataclass(frozen=True)
+class Recognition:
+    detections: tuple[Detection, ...]
+    stats: RecognitionStats
+
+
+def _scene_oriented_points(primitives, max_extent):
+    """Plane centroids with normals and cylinder axes (the point nearest the centroid) of
+    object-sized primitives; a primitive larger than every model (the table) is skipped."""
+    pts, nrm, used = [], [], []
+    for index, p in enumerate(primitives):
+        if max(p.box.extent) > max_extent:
+            continue
+        if p.kind is PrimitiveKind.PLANE:
+            pts.append(p.centroid)
+            nrm.append(p.normal)
+        else:
+            pts.append(p.axis_point + ((p.centroid - p.axis_point) @ p.axis) * p.axis)
+            nrm.append(p.axis)
+        used.append(index)
+    return np.array(pts).reshape(-1, 3), np.array(nrm).reshape(-1, 3), used
+
+
+def _cluster(poses, models, library, cell, limit):
+    """Vote poses into (model, position cell, coarse rotation) bins. Each model
+    gets an equal share of the `limit` hypotheses, its fullest bins first (one
+    pose each): a model with many primitives collects more chance votes, and a
+    single shared ranking would crowd the others out."""
+    centres = np.array([m.points.mean(axis=0) for m in library.models])[models]
+    where = np.einsum("kij,kj->ki", poses[:, :3, :3], centres) + poses[:, :3, 3]
+    quat = Rotation.from_matrix(poses[:, :3, :3]).as_quat()
+    quat *= np.where(quat[:, 3:] < 0, -1, 1)
+    keys = np.column_stack([models, np.floor(where / cell), np.round(quat * 4)]).astype(np.int64)
+    unique, first, votes = np.unique(keys, axis=0, return_index=True, return_counts=True)
+    quota = max(1, limit // len(library))
+    chosen = []
+    for model in np.unique(unique[:, 0]):
+        mine = np.flatnonzero(unique[:, 0] == model)
+        chosen.append(first[mine[np.argsort(-votes[mine], kind="stable")[:quota]]])
+    best = np.concatenate(chosen)
+    return poses[best], models[best]
+
+
+def _box_score(model, T, scene_boxes) -> float:
+    """Share of the model's sensor-facing primitive volume that scene boxes cover."""
+    boxes, weights = [], []
+    for p in model.graph.primitives:
+        box = transform_box(p.box, T)
+        if p.kind is PrimitiveKind.PLANE and (T[:3, :3] @ p.normal) @ -box.center <= 0:
+            continue  # faces away from the sensor: no scene box can match it
+        boxes.append(box)
+        weights.append(max(p.box.volume, 1e-9) + 1e-6 * p.n_points)
+    if not boxes or not scene_boxes:
+        return 0.0
+    near = overlap_candidates(*boxes_to_arrays(boxes), *boxes_to_arrays(scene_boxes))
+    covered = [max((intersection_ratio(b, scene_boxes[j]) for j in np.flatnonzero(near[i])), default=0.0)
+               for i, b in enumerate(boxes)]
+    return float(np.average(covered, weights=weights))
+
+
+class Recognizer:
+    """Find library models in clouds: `Recognizer(library, method="psorr" | "orr").recognize(cloud)`."""
+
+    def __init__(self, library: ModelLibrary, method: str = "psorr", params: RecognizeParams | None = None):
+        if method not in METHODS:
+            raise InvalidInputError(f"unknown method {method!r}; choose one of {METHODS}")
+        self.library, self.method, self.params = library, method, params or RecognizeParams()
+        self.max_diameter = max(m.diameter for m in library.models)
+
+    def recognize(self, cloud: PointCloud, rng: np.random.Generator | None = None) -> Recognition:
+        if not isinstance(cloud, PointCloud):
+            raise InvalidInputError(f"recognize() takes a psorr.PointCloud, got {type(cloud).__name__}")
+        rng = rng if rng is not None else np.random.default_rng(0)
+        start = time.perf_counter()
+        view = SceneView(cloud)
+        if self.method == "psorr":
+            candidates, n_hyp, verify_ms, decomposition_ms = self._psorr(cloud, view, rng)
+        else:
+            candidates, n_hyp, verify_ms = orr_hypotheses(self, cloud, view, rng)
+            decomposition_ms = 0.0
+        detections = self._accept(view, candidates)
+        total = (time.perf_counter() - start) * 1e3
+        stats = RecognitionStats(self.method, n_hyp, verify_ms / max(n_hyp, 1), decomposition_ms, total,
+                                 self.library.train_ms)
+        return Recognition(tuple(detections), stats)
+
+    def _psorr(self, cloud, view, rng):
+        p = self.params
+        t0 = time.perf_counter()
+        scene = decompose(cloud, p.decompose, rng)
+        decomposition_ms = (time.perf_counter() - t0) * 1e3
+        pts, nrm, used = _scene_oriented_points(scene.primitives, 1.2 * self.max_diameter)
+        if len(pts) < 2:
+            return [], 0, 0.0, decomposition_ms
+        i, j = np.nonzero(np.linalg.norm(pts[:, None] - pts[None], axis=2) <= self.max_diameter)
+        keep = i != j
+        i, j = i[keep], j[keep]
+        scene_index, rows = self.library.table.lookup(pts[i], nrm[i], pts[j], nrm[j])
+        if len(rows) == 0:
+            return [], 0, 0.0, decomposition_ms
+        poses, models = self.library.table.poses(scene_index, rows, pts[i], nrm[i], pts[j])
+        poses, models = _cluster(poses, models, self.library, p.cluster_cell, p.max_hypotheses)
+        scene_boxes = [scene.primitives[k].box for k in used]
+        t1 = time.perf_counter()
+        scores = np.array([_box_score(self.library.models[m], T, scene_boxes) for T, m in zip(poses, models)])
+        verify_ms = (time.perf_counter() - t1) * 1e3
+        order = np.argsort(-scores, kind="stable")
+        order = order[scores[order] >= p.min_box_score][: p.refine_top]
+        return [(models[k], poses[k]) for k in order], len(poses), verify_ms, decomposition_ms
+
+    def _accept(self, view, candidates) -> list[Detection]:
+        p = self.params
+        scored = []
+        for model_index, T in candidates:
+            model = self.library.models[model_index]
+            T = refine_icp(view, model.points, model.normals, T, p.icp_distance)
+            T = refine_icp(view, model.points, model.normals, T, p.icp_distance / 3)
+            check = check_pose(view, model.points, model.normals, T, p.check)
+            if (check.n_support >= p.min_support and check.visible_fraction >= p.min_visible_fraction
+                    and check.violation_ratio <= p.max_violation_ratio):
+                scored.append((check.score, model, T, check))
+        scored.sort(key=lambda s: -s[0])
+        claimed = np.zeros((view.width // 4 + 1) * (view.height // 4 + 1), dtype=bool)
+        detections = []
+        for score, model, T, check in scored:
+            blocks = check.supported_blocks
+            if claimed[blocks].mean() > p.max_shared_pixels:
+                continue
+            claimed[blocks] = True
+            detections.append(Detection(model.name, T, score, check.visible_fraction))
+        return detections

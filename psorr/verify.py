@@ -1,0 +1,144 @@
+"""Point-level acceptance of a pose, and its ICP refinement.
+
+The cloud is rasterised into a depth buffer seen from its sensor at the
+origin. Each model point that would face the sensor under the pose, and is
+not hidden by the model itself, is then either supported (it lies on the
+measured surface), a violation (it lies in front of the measured surface,
+where the sensor saw through it), occluded (something nearer hides it) or
+unknown (no measurement there).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import open3d as o3d
+
+from psorr.kinect_noise import KINECT_V1
+from psorr.types import PointCloud
+
+FOCAL = 525.0  # pixels: a Kinect v1's, so the buffer matches its resolution
+_SELF_BLOCK = 4  # pixels: model samples are sparser than pixels, so self-occlusion is judged per block
+
+
+@dataclass(frozen=True)
+class CheckParams:
+    """Tolerances of the point check: depth agreement is max(min_tolerance, sigmas x Kinect sigma(z))."""
+
+    sigmas: float = 3.0
+    min_tolerance: float = 0.004
+    max_points: int = 1500
+
+
+@dataclass(frozen=True)
+class PoseCheck:
+    """Counts over the model's self-visible sample points, and the verdicts derived from them."""
+
+    n_visible: int
+    n_support: int
+    n_violation: int
+    n_occluded: int
+    supported_blocks: np.ndarray  # flat indices of the 4x4-pixel blocks the model explains
+
+    @property
+    def visible_fraction(self) -> float:
+        return self.n_support / self.n_visible if self.n_visible else 0.0
+
+    @property
+    def violation_ratio(self) -> float:
+        seen = self.n_support + self.n_violation
+        return self.n_violation / seen if seen else 1.0
+
+    @property
+    def score(self) -> float:
+        return float(np.clip(self.visible_fraction * (1.0 - self.violation_ratio), 0.0, 1.0))
+
+
+def depth_tolerance(z: np.ndarray, params: CheckParams) -> np.ndarray:
+    sigma = np.sqrt(KINECT_V1.axial_sigma(z) ** 2 + KINECT_V1.quantisation_step(z) ** 2 / 12.0)
+    return np.maximum(params.min_tolerance, params.sigmas * sigma)
+
+
+class SceneView:
+    """A depth buffer of a cloud from its sensor origin, plus an Open3D copy for ICP."""
+
+    def __init__(self, cloud: PointCloud, icp_voxel: float = 0.004):
+        pts = cloud.points[cloud.valid_mask]
+        pts = pts[pts[:, 2] > 1e-3]
+        self.points = pts
+        ux, uy = pts[:, 0] / pts[:, 2], pts[:, 1] / pts[:, 2]
+        self.cx, self.cy = -FOCAL * ux.min() + 2, -FOCAL * uy.min() + 2
+        self.width = int(FOCAL * (ux.max() - ux.min())) + 5
+        self.height = int(FOCAL * (uy.max() - uy.min())) + 5
+        u, v, _ = self.project(pts)
+        depth = np.full(self.width * self.height, np.inf)
+        order = np.argsort(-pts[:, 2], kind="stable")  # far first, so the nearest point wins each pixel
+        depth[(v * self.width + u)[order]] = pts[order, 2]
+        self.depth = depth
+        down = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(pts)).voxel_down_sample(icp_voxel)
+        down.estimate_normals(o3d.geometry.KDTreeSearchParamHybrid(radius=3 * icp_voxel, max_nn=20))
+        down.orient_normals_towards_camera_location(np.zeros(3))
+        self.icp_target = down
+
+    def project(self, points: np.ndarray):
+        """Pixel (u, v) of (N, 3) points and an in-bounds mask (N,)."""
+        z = np.maximum(points[:, 2], 1e-9)
+        u = np.round(FOCAL * points[:, 0] / z + self.cx).astype(np.int64)
+        v = np.round(FOCAL * points[:, 1] / z + self.cy).astype(np.int64)
+        inside = (u >= 0) & (u < self.width) & (v >= 0) & (v < self.height) & (points[:, 2] > 1e-3)
+        return np.clip(u, 0, self.width - 1), np.clip(v, 0, self.height - 1), inside
+
+
+def visible_model_points(view: SceneView, points: np.ndarray, normals: np.ndarray):
+    """Indices of posed model points (cloud frame) that face the sensor and are
+    not hidden behind nearer points of the same model."""
+    facing = np.flatnonzero(np.einsum("ij,ij->i", normals, -points) > 0)
+    u, v, inside = view.project(points[facing])
+    facing, u, v = facing[inside], u[inside], v[inside]
+    block = (v // _SELF_BLOCK) * (view.width // _SELF_BLOCK + 1) + u // _SELF_BLOCK
+    nearest = np.full(block.max() + 1 if len(block) else 1, np.inf)
+    np.minimum.at(nearest, block, points[facing, 2])
+    tol = depth_tolerance(points[facing, 2], CheckParams())
+    return facing[points[facing, 2] <= nearest[block] + 2 * tol]
+
+
+def check_pose(view: SceneView, model_points, model_normals, T_cloud_model, params=CheckParams()) -> PoseCheck:
+    """Classify the model's self-visible points under the pose (see the module docstring)."""
+    stride = max(1, len(model_points) // params.max_points)
+    R, t = T_cloud_model[:3, :3], T_cloud_model[:3, 3]
+    pts = model_points[::stride] @ R.T + t
+    nrm = model_normals[::stride] @ R.T
+    visible = visible_model_points(view, pts, nrm)
+    if len(visible) == 0:
+        return PoseCheck(0, 0, 0, 0, np.empty(0, dtype=np.int64))
+    u, v, _ = view.project(pts[visible])
+    pixel = v * view.width + u
+    observed = view.depth[pixel]
+    z = pts[visible, 2]
+    tol = depth_tolerance(z, params)
+    support = np.abs(z - observed) < tol
+    violation = np.isfinite(observed) & (z < observed - tol)
+    occluded = np.isfinite(observed) & (z > observed + tol)
+    # Blocks, not pixels: two poses of one instance check different samples of
+    # its points, so only coarse cells tell that they explain the same surface.
+    blocks = (v // _SELF_BLOCK) * (view.width // _SELF_BLOCK + 1) + u // _SELF_BLOCK
+    return PoseCheck(len(visible), int(support.sum()), int(violation.sum()), int(occluded.sum()),
+                     np.unique(blocks[support]))
+
+
+def refine_icp(view: SceneView, model_points, model_normals, T_cloud_model, max_distance: float,
+               iterations: int = 30) -> np.ndarray:
+    """Point-to-plane ICP of the model's visible points onto the scene; returns the refined pose."""
+    R, t = T_cloud_model[:3, :3], T_cloud_model[:3, 3]
+    stride = max(1, len(model_points) // 3000)
+    pts, nrm = model_points[::stride] @ R.T + t, model_normals[::stride] @ R.T
+    visible = visible_model_points(view, pts, nrm)
+    if len(visible) < 10:
+        return T_cloud_model
+    source = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(pts[visible]))
+    result = o3d.pipelines.registration.registration_icp(
+        source, view.icp_target, max_distance, np.eye(4),
+        o3d.pipelines.registration.TransformationEstimationPointToPlane(),
+        o3d.pipelines.registration.ICPConvergenceCriteria(max_iteration=iterations))
+    return np.asarray(result.transformation) @ T_cloud_model

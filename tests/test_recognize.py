@@ -1,0 +1,97 @@
+"""Recognition on seeded ray-cast Kinect scenes of the catalog workpieces,
+scored by the symmetry-aware ADD (correct under 0.1 x the model diameter).
+
+These are regression tests on scenes PSORR is known to solve; they are NOT
+a recall measurement. Recall over seeded scene sets is far below the issue's
+targets today (see issue 3's note): parts that show fewer than two
+primitives to a Kinect at 0.75 m (bracket, bushing, the flat circuit board)
+give PSORR no pairs, and clutter recall is about 0.4.
+"""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from psorr.errors import InvalidInputError
+from psorr.io import write_cloud
+from psorr.library import ModelLibrary
+from psorr.recognize import Recognizer
+from psorr.scenes import workpiece_scene
+from psorr.workpieces import DEFAULT_CATALOG, load_catalog, symmetric_add
+
+MESHES = DEFAULT_CATALOG.parent / "meshes"
+
+
+@pytest.fixture(scope="module")
+def catalog():
+    return load_catalog()
+
+
+@pytest.fixture(scope="module")
+def library(tmp_path_factory):
+    import os
+
+    os.environ["PSORR_CACHE"] = str(tmp_path_factory.mktemp("cache"))
+    return ModelLibrary.from_meshes(sorted(MESHES.glob("*.stl")))  # all 8 parts: 6+ models, as in the issue
+
+
+def _score(scene, detections, library, catalog):
+    """(instances found, false positives)."""
+    found, false = set(), 0
+    for det in detections:
+        model = library.model(det.model)
+        hits = [k for k, inst in enumerate(scene.instances) if inst.name == det.model and
+                symmetric_add(model.points[::10], det.T_cloud_model, inst.T_camera_model, catalog[inst.name])
+                < 0.1 * model.diameter]
+        if hits:
+            found.add(hits[0])
+        else:
+            false += 1
+    return len(found), false
+
+
+@pytest.mark.parametrize("name, seed", [("flanged_hub", 0), ("transformer", 2), ("u_channel", 1)])
+def test_known_single_workpiece_scene_is_recognised(name, seed, library, catalog):
+    scene = workpiece_scene(np.random.default_rng(seed), {name: catalog[name].load_mesh()}, [name])
+    result = Recognizer(library).recognize(scene.cloud)
+    assert _score(scene, result.detections, library, catalog) == (1, 0)
+    det = result.detections[0]
+    assert 0 < det.score <= 1 and 0 < det.visible_fraction <= 1
+    assert result.stats.hypotheses <= 100 and result.stats.verify_ms_per_hypothesis > 0
+
+
+def test_empty_table_gives_no_detection(library, catalog):
+    scene = workpiece_scene(np.random.default_rng(9), {}, [])
+    assert Recognizer(library).recognize(scene.cloud).detections == ()
+
+
+def test_unknown_method_names_the_choices(library):
+    with pytest.raises(InvalidInputError, match="psorr"):
+        Recognizer(library, method="ransac")
+
+
+def test_cli_prints_the_json_contract(tmp_path, library, catalog):
+    names = ["transformer"]
+    scene = workpiece_scene(np.random.default_rng(2), {n: catalog[n].load_mesh() for n in names}, names)
+    cloud = tmp_path / "scene.pcd"
+    write_cloud(cloud, scene.cloud, compressed=True)
+    lib_file = library.save(tmp_path / "library.npz")
+    out = subprocess.run([sys.executable, "-m", "psorr.cli", "recognize", str(lib_file), str(cloud), "--json",
+                          "--png", str(tmp_path / "overlay.png")], capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    lines = out.stdout.strip().splitlines()
+    assert len(lines) == 1
+    record = json.loads(lines[0])
+    assert set(record) == {"detections", "stats"}
+    assert set(record["stats"]) == {"method", "hypotheses", "verify_ms_per_hypothesis", "total_ms", "train_ms"}
+    assert record["stats"]["method"] == "psorr"
+    det = record["detections"][0]
+    assert set(det) == {"model", "pose", "score"} and det["model"] == "transformer"
+    pose = np.array(det["pose"])
+    assert pose.shape == (4, 4)
+    assert symmetric_add(library.model("transformer").points[::10], pose, scene.instances[0].T_camera_model,
+                         catalog["transformer"]) < 0.1 * library.model("transformer").diameter
+    assert (tmp_path / "overlay.png").exists()
