@@ -80,6 +80,18 @@ class SceneView:
         down.estimate_normals(o3d.geometry.KDTreeSearchParamHybrid(radius=3 * icp_voxel, max_nn=20))
         down.orient_normals_towards_camera_location(np.zeros(3))
         self.icp_target = down
+        # The supporting plane (the largest one) explains any pose that sinks a
+        # model face into it, so its pixels never count as support.
+        self.background = np.zeros(self.width * self.height, dtype=bool)
+        self.off_background = np.ones(len(down.points), dtype=bool)
+        if len(down.points) >= 3:
+            o3d.utility.random.seed(0)
+            plane, inliers = down.segment_plane(distance_threshold=0.008, ransac_n=3, num_iterations=200)
+            if len(inliers) > 0.2 * len(down.points):
+                a, b, c, d = plane
+                on_plane = np.abs(pts @ np.array([a, b, c]) + d) < 0.008
+                self.background[(v * self.width + u)[on_plane]] = True
+                self.off_background[np.asarray(inliers)] = False
 
     def project(self, points: np.ndarray):
         """Pixel (u, v) of (N, 3) points and an in-bounds mask (N,)."""
@@ -117,7 +129,7 @@ def check_pose(view: SceneView, model_points, model_normals, T_cloud_model, para
     observed = view.depth[pixel]
     z = pts[visible, 2]
     tol = depth_tolerance(z, params)
-    support = np.abs(z - observed) < tol
+    support = (np.abs(z - observed) < tol) & ~view.background[pixel]
     violation = np.isfinite(observed) & (z < observed - tol)
     occluded = np.isfinite(observed) & (z > observed + tol)
     # Blocks, not pixels: two poses of one instance check different samples of
