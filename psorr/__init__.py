@@ -6,11 +6,16 @@ graph; recognise CAD-trained workpieces from it. Never imports the simulator.
 
 from psorr.decomposition import DecomposeParams, Decomposition, decompose
 from psorr.errors import CloudFileError, InvalidInputError, PsorrError
-from psorr.types import OrientedBox, PointCloud, Primitive, PrimitiveKind, PrimitiveShapeGraph
+from psorr.library import ModelLibrary
+from psorr.recognize import Recognizer
+from psorr.types import Detection, OrientedBox, PointCloud, Primitive, PrimitiveKind, PrimitiveShapeGraph
 
 __all__ = [
     "CloudFileError",
     "Decomposition",
+    "Detection",
+    "ModelLibrary",
+    "Recognizer",
     "DecomposeParams",
     "InvalidInputError",
     "OrientedBox",
