@@ -23,18 +23,13 @@ from tqdm import tqdm
 
 from psorr.decomposition import DecomposeParams, decompose
 from psorr.io import read_cloud
-from psorr.metrics import segmentation_scores
+from psorr.metrics import osd_object_ids, segmentation_scores
 from psorr.render import save_decomposition_png
 from psorr.types import PointCloud
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_OSD = ROOT.parent / "shared" / "osd" / "learn"
 TARGETS = {"purity": 0.95, "coverage": 0.85, "median_ms": 150.0}
-
-
-def osd_objects(labels: np.ndarray) -> np.ndarray:
-    """OSD labels -> object ids: 0 invalid, 1 table (labels 1-9), 2+ objects (label // 10)."""
-    return np.where(labels >= 10, labels // 10, np.where(labels >= 1, 1, 0))
 
 
 def open3d_plane_loop(cloud: PointCloud, voxel: float = 0.01, distance: float = 0.01,
@@ -78,7 +73,7 @@ def run(scene_paths, repeats: int) -> list[dict]:
     rows = []
     for path in tqdm(scene_paths, desc="OSD scenes", file=sys.stderr):
         cloud = read_cloud(path)
-        truth = osd_objects(cloud.labels)
+        truth = osd_object_ids(cloud.labels)
         # Both methods are seeded, so every repeat gives the same labels.
         result, ours_ms = best_of(repeats, lambda c=cloud: decompose(c, params, np.random.default_rng(0)))
         ours = segmentation_scores(truth, result.labels, background=(0, 1))

@@ -16,7 +16,7 @@ import numpy as np
 
 from psorr.decomposition import DecomposeParams, decompose
 from psorr.io import read_cloud, write_cloud
-from psorr.metrics import segmentation_scores
+from psorr.metrics import osd_object_ids, segmentation_scores
 from psorr.render import save_decomposition_png
 from psorr.scenes import workpiece_scene
 from psorr.types import PrimitiveKind
@@ -76,8 +76,7 @@ def main() -> int:
         start = time.perf_counter()
         real_result = decompose(real)
         real_ms = (time.perf_counter() - start) * 1e3
-        truth = np.where(real.labels >= 10, real.labels // 10, np.where(real.labels >= 1, 1, 0))
-        real_scores = segmentation_scores(truth, real_result.labels, background=(0, 1))
+        real_scores = segmentation_scores(osd_object_ids(real.labels), real_result.labels, background=(0, 1))
         real_picture = save_decomposition_png(OUT / "osd_learn35_decomposition.png", real, real_result.labels,
                                               real_result.graph, title=f"OSD learn35 (real Kinect): "
                                               f"{len(real_result.primitives)} primitives, {real_ms:.0f} ms")

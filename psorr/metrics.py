@@ -57,3 +57,10 @@ def segmentation_scores(truth: np.ndarray, labels: np.ndarray, background=(0,)) 
     purity = hits / sizes[object_prims].sum() if len(object_prims) else float("nan")
     return SegmentationScores(float(np.mean(coverage)) if coverage else float("nan"), float(purity),
                               len(objects), len(object_prims))
+
+
+def osd_object_ids(labels: np.ndarray) -> np.ndarray:
+    """Object Segmentation Database labels -> object ids: 0 for invalid points,
+    1 for the table (labels 1-9), label // 10 for the objects (2, 3, ...)."""
+    labels = np.asarray(labels)
+    return np.where(labels >= 10, labels // 10, np.where(labels >= 1, 1, 0))
