@@ -41,9 +41,14 @@ def surface_normals(kind: PrimitiveKind, params, points: np.ndarray) -> np.ndarr
 
 
 def normal_agreement(kind: PrimitiveKind, params, points, normals) -> np.ndarray:
-    """(N,) |cos| of the angle between the measured and the shape's normals."""
+    """(N,) cos of the angle between the measured and the shape's normals.
+
+    Signed for planes, whose normal faces the same way as the points' (towards
+    the sensor, or outwards on a CAD part): the two sides of a 1.5 mm sheet
+    must not explain each other. A cylinder's |cos| serves outer walls and bores.
+    """
     if kind is PrimitiveKind.PLANE:
-        return np.abs(normals @ np.asarray(params[:3], float))
+        return normals @ np.asarray(params[:3], float)
     return np.abs(np.einsum("ij,ij->i", surface_normals(kind, params, points), normals))
 
 
@@ -53,7 +58,7 @@ def support_counts(kind: PrimitiveKind, params: np.ndarray, points, normals, thr
     params = np.asarray(params, float)
     if kind is PrimitiveKind.PLANE:
         dist = np.abs(points @ params[:, :3].T + params[:, 3])
-        agree = np.abs(normals @ params[:, :3].T)
+        agree = normals @ params[:, :3].T
         return ((dist < threshold[:, None]) & (agree > cos_max)).sum(axis=0)
     rel = points[None, :, :] - params[:, None, :3]
     along = np.einsum("cnj,cj->cn", rel, params[:, 3:6])
@@ -63,14 +68,16 @@ def support_counts(kind: PrimitiveKind, params: np.ndarray, points, normals, thr
     return ((np.abs(r - params[:, 6:7]) < threshold) & (agree > cos_max)).sum(axis=1)
 
 
-def fit_plane(points: np.ndarray) -> tuple[float, ...]:
-    """Least-squares plane through (N, 3) points, normal oriented towards the
-    sensor at the origin, so that d > 0 for a plane in front of it."""
+def fit_plane(points: np.ndarray, normals: np.ndarray | None = None) -> tuple[float, ...]:
+    """Least-squares plane through (N, 3) points. Its normal faces the way the
+    points' (N, 3) normals do on average, or, without normals, the sensor at
+    the origin (so that d > 0 for a plane in front of it)."""
     centroid = column_mean(points)
     centred = points - centroid
     _, vecs = np.linalg.eigh(centred.T @ centred)
     normal = vecs[:, 0]
-    if normal @ centroid > 0:
+    facing = -(normal @ centroid) if normals is None else normal @ column_mean(normals)
+    if facing < 0:
         normal = -normal
     return (*normal, float(-normal @ centroid))
 
@@ -160,7 +167,7 @@ def fit(kind: PrimitiveKind, points: np.ndarray, normals: np.ndarray, refine: bo
     Returns params, or None if the points do not determine one (a cylinder
     wider than `max_radius` is a plane in disguise and counts as none)."""
     if kind is PrimitiveKind.PLANE:
-        return fit_plane(points) if len(points) >= 3 else None
+        return fit_plane(points, normals) if len(points) >= 3 else None
     params = fit_cylinder(points, normals)
     if params is not None and refine:
         params = refine_cylinder(points, params)

@@ -261,7 +261,7 @@ def _finalise(cloud, vox, pieces, labels, edges, params):
             refit = shapes.fit(kind, pts[sub], normals, refine=True, max_radius=params.cylinder_radius_range[1])
             if refit is None and kind is PrimitiveKind.CYLINDER:
                 # Refined out of the radius range: the patch is flat after all.
-                kind, refit = PrimitiveKind.PLANE, shapes.fit_plane(pts[sub])
+                kind, refit = PrimitiveKind.PLANE, shapes.fit_plane(pts[sub], normals)
         if len(idx) < params.min_points or refit is None:
             point_labels[idx] = -1
             continue

@@ -42,12 +42,22 @@ class Voxelized:
 _DENSE_GRID_CELLS = 8_000_000  # a table-top scene at 1 cm needs well under 1M
 
 
-def voxel_downsample(points: np.ndarray, voxel_size: float) -> tuple[np.ndarray, np.ndarray]:
-    """Average (N, 3) finite points per voxel. Returns (centroids (M, 3), voxel_of (N,))."""
+def voxel_downsample(points: np.ndarray, voxel_size: float, normals: np.ndarray | None = None):
+    """Average (N, 3) finite points per voxel. Returns (centroids (M, 3), voxel_of (N,)).
+
+    With (N, 3) normals, points whose normals point different ways (the two
+    sides of a thin sheet) go to different voxels even when they are closer
+    than a voxel, so their normals never average away.
+    """
     keys = np.floor(points / voxel_size).astype(np.int64)
     keys -= column_min(keys)
     dims = column_max(keys) + 1
     flat = (keys[:, 0] * dims[1] + keys[:, 1]) * dims[2] + keys[:, 2]
+    if normals is not None:
+        dominant = np.abs(normals).argmax(axis=1)
+        side = dominant * 2 + (normals[np.arange(len(normals)), dominant] > 0)
+        flat = flat * 6 + side
+        dims = dims * np.array([1, 1, 6])
     n_cells = int(np.prod(dims))
     if n_cells <= _DENSE_GRID_CELLS:
         # Counting over a dense grid is linear; sorting the keys costs several times more.
@@ -124,7 +134,8 @@ def preprocess(cloud: PointCloud, voxel_size: float, k_neighbours: int) -> Voxel
         raise InvalidInputError(
             f"the cloud has {n_valid} finite points; decomposition needs at least {k_neighbours + 1}"
         )
-    centroids, voxel_of_valid = voxel_downsample(cloud.points[valid], voxel_size)
+    given = None if cloud.normals is None else cloud.normals[valid]
+    centroids, voxel_of_valid = voxel_downsample(cloud.points[valid], voxel_size, given)
     if len(centroids) < k_neighbours + 1:
         raise InvalidInputError(
             f"only {len(centroids)} voxels of {voxel_size} m; use a smaller voxel_size"
@@ -134,8 +145,7 @@ def preprocess(cloud: PointCloud, voxel_size: float, k_neighbours: int) -> Voxel
     dist, idx = cKDTree(centroids).query(centroids, k=k_neighbours + 1)
     neighbours, neighbour_dist = idx[:, 1:], dist[:, 1:]
     normals, curvature = neighbourhood_normals(centroids, neighbours)
-    if cloud.normals is not None:
-        given = cloud.normals[valid]
+    if given is not None:
         summed = np.column_stack([np.bincount(voxel_of_valid, given[:, k], len(centroids)) for k in range(3)])
         length = np.linalg.norm(summed, axis=1, keepdims=True)
         normals = np.where(length > 1e-9, summed / np.maximum(length, 1e-12), normals)
