@@ -26,7 +26,7 @@ from psorr.io import read_mesh
 from psorr.ppf import HashParams, PairTable
 from psorr.types import OrientedBox, PointCloud, Primitive, PrimitiveKind, PrimitiveShapeGraph
 
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
 MESH_SUFFIXES = (".stl", ".obj", ".ply")
 UNITS = {"m": 1.0, "mm": 0.001}
 
@@ -99,6 +99,18 @@ def train_model(name: str, mesh: trimesh.Trimesh, params: TrainParams, sha: str 
     return Model(name, np.asarray(points), np.asarray(normals), result.graph, diameter, sha)
 
 
+def spread_samples(points: np.ndarray, count: int, rng) -> np.ndarray:
+    """Indices of `count` points spread over (N, 3) points by farthest-point
+    sampling: random picks leave gaps, and a scene centroid falling in a gap
+    gets only a poor model partner."""
+    chosen = [int(rng.integers(len(points)))]
+    nearest = np.linalg.norm(points - points[chosen[0]], axis=1)
+    for _ in range(min(count, len(points)) - 1):
+        chosen.append(int(np.argmax(nearest)))
+        nearest = np.minimum(nearest, np.linalg.norm(points - points[chosen[-1]], axis=1))
+    return np.array(chosen)
+
+
 def _oriented_points(model: Model, params: TrainParams, rng) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Oriented points per usable primitive: plane samples with the plane's
     normal; cylinder samples dropped onto the axis, with the axis both ways
@@ -108,8 +120,10 @@ def _oriented_points(model: Model, params: TrainParams, rng) -> tuple[np.ndarray
     for index, primitive in enumerate(model.graph.primitives):
         if primitive.n_points * spacing2 < params.min_primitive_area:
             continue
-        chosen = rng.choice(primitive.inliers, size=min(params.pair_points, primitive.n_points), replace=False)
-        p = model.points[chosen]
+        inliers = model.points[primitive.inliers]
+        # The primitive's own centroid first: a face seen whole puts its scene
+        # centroid exactly there.
+        p = np.vstack([primitive.centroid, inliers[spread_samples(inliers, params.pair_points - 1, rng)]])
         if primitive.kind is PrimitiveKind.PLANE:
             pts.append(p)
             nrm.append(np.broadcast_to(primitive.normal, p.shape))

@@ -38,6 +38,7 @@ class RecognizeParams:
     max_hypotheses: int = 100           # PSORR: clustered hypotheses screened by boxes
     cluster_cell: float = 0.02          # PSORR: position grid of the vote clustering
     min_box_score: float = 0.1
+    box_thickness: float = 0.04         # boxes are thickened to this: pair poses are off by a centimetre or so
     refine_top: int = 24                # best screened hypotheses that get ICP and the point check
     orr_hypotheses: int = 1500          # ORR: hypotheses drawn and checked point by point
     icp_distance: float = 0.012
@@ -101,7 +102,7 @@ def _cluster(poses, models, library, cell, limit):
     return poses[best], models[best]
 
 
-def _box_score(model, T, scene_boxes) -> float:
+def _box_score(model, T, scene_boxes, thickness: float) -> float:
     """Share of the model's sensor-facing primitive volume that scene boxes cover."""
     boxes, weights = [], []
     for p in model.graph.primitives:
@@ -113,7 +114,7 @@ def _box_score(model, T, scene_boxes) -> float:
     if not boxes or not scene_boxes:
         return 0.0
     near = overlap_candidates(*boxes_to_arrays(boxes), *boxes_to_arrays(scene_boxes))
-    covered = [max((intersection_ratio(b, scene_boxes[j]) for j in np.flatnonzero(near[i])), default=0.0)
+    covered = [max((intersection_ratio(b, scene_boxes[j], thickness) for j in np.flatnonzero(near[i])), default=0.0)
                for i, b in enumerate(boxes)]
     return float(np.average(covered, weights=weights))
 
@@ -162,7 +163,8 @@ class Recognizer:
         poses, models = _cluster(poses, models, self.library, p.cluster_cell, p.max_hypotheses)
         scene_boxes = [scene.primitives[k].box for k in used]
         t1 = time.perf_counter()
-        scores = np.array([_box_score(self.library.models[m], T, scene_boxes) for T, m in zip(poses, models)])
+        scores = np.array([_box_score(self.library.models[m], T, scene_boxes, p.box_thickness)
+                           for T, m in zip(poses, models)])
         verify_ms = (time.perf_counter() - t1) * 1e3
         order = np.argsort(-scores, kind="stable")
         order = order[scores[order] >= p.min_box_score][: p.refine_top]
