@@ -1,11 +1,11 @@
 """Recognition on seeded ray-cast Kinect scenes of the catalog workpieces,
 scored by the symmetry-aware ADD (correct under 0.1 x the model diameter).
 
-These are regression tests on scenes PSORR is known to solve; they are NOT
-a recall measurement. Recall over seeded scene sets is far below the issue's
-targets today (see issue 3's note): parts that show fewer than two
+The recall tests are floors that catch regressions, set below what PSORR
+reaches today (singles 8-9/16, clutter 14/32 on these seeds) and far below
+the issue's targets (0.95 and 0.85): parts that show fewer than two
 primitives to a Kinect at 0.75 m (bracket, bushing, the flat circuit board)
-give PSORR no pairs, and clutter recall is about 0.4.
+give PSORR no pairs.
 """
 
 import json
@@ -53,14 +53,34 @@ def _score(scene, detections, library, catalog):
     return len(found), false
 
 
-@pytest.mark.parametrize("name, seed", [("flanged_hub", 0), ("transformer", 2), ("u_channel", 1)])
-def test_known_single_workpiece_scene_is_recognised(name, seed, library, catalog):
-    scene = workpiece_scene(np.random.default_rng(seed), {name: catalog[name].load_mesh()}, [name])
-    result = Recognizer(library).recognize(scene.cloud)
-    assert _score(scene, result.detections, library, catalog) == (1, 0)
-    det = result.detections[0]
-    assert 0 < det.score <= 1 and 0 < det.visible_fraction <= 1
-    assert result.stats.hypotheses <= 100 and result.stats.verify_ms_per_hypothesis > 0
+def test_single_part_recall_floor(library, catalog):
+    # Two seeded scenes per catalog part. The floor guards against regressions;
+    # the issue's target (0.95) is not met yet.
+    found = false = total = 0
+    for k, name in enumerate(sorted(catalog)):
+        for s in range(2):
+            scene = workpiece_scene(np.random.default_rng(2000 + 10 * k + s), {name: catalog[name].load_mesh()}, [name])
+            result = Recognizer(library).recognize(scene.cloud)
+            f, fp = _score(scene, result.detections, library, catalog)
+            found, false, total = found + f, false + fp, total + 1
+            for det in result.detections:
+                assert 0 < det.score <= 1 and 0 < det.visible_fraction <= 1
+            assert result.stats.hypotheses <= 100
+    assert found / total >= 0.45, f"single-part recall {found}/{total}"
+    assert false <= 2, f"{false} false positives in {total} single-part scenes"
+
+
+def test_clutter_recall_floor(library, catalog):
+    # Seeded 4-part scenes; the issue's target (0.85) is not met yet.
+    names_all = sorted(catalog)
+    found = false = total = 0
+    for seed in range(6):
+        names = list(np.random.default_rng(seed).choice(names_all, size=4, replace=False))
+        scene = workpiece_scene(np.random.default_rng(1000 + seed), {n: catalog[n].load_mesh() for n in names}, names)
+        f, fp = _score(scene, Recognizer(library).recognize(scene.cloud).detections, library, catalog)
+        found, false, total = found + f, false + fp, total + len(names)
+    assert found / total >= 0.35, f"clutter recall {found}/{total}"
+    assert false <= 6, f"{false} false positives in 6 clutter scenes"
 
 
 def test_empty_table_gives_no_detection(library, catalog):
