@@ -6,7 +6,6 @@ from __future__ import annotations
 import time
 
 import numpy as np
-import open3d as o3d
 
 from psorr.verify import check_pose
 
@@ -15,19 +14,18 @@ def orr_hypotheses(recognizer, cloud, view, rng):
     """(candidates [(model index, T)], hypotheses checked, total check ms)."""
     p, library = recognizer.params, recognizer.library
     # Oriented scene points: the view's ICP copy already carries normals facing the sensor.
-    pts = np.asarray(view.icp_target.points)
-    nrm = np.asarray(view.icp_target.normals)
-    tree = o3d.geometry.KDTreeFlann(view.icp_target)
     # Papazov samples the scene with the supporting plane segmented away.
-    seeds = np.flatnonzero(view.off_background)
-    if len(seeds) == 0:
+    pts = view.object_points
+    nrm = np.asarray(view.objects.normals)
+    tree = view.object_tree
+    if len(pts) < 2:
         return [], 0, 0.0
     diameters = np.array([m.diameter for m in library.models])
     checked, elapsed, scored = 0, 0.0, []
     attempts = 0
     while checked < p.orr_hypotheses and attempts < 20 * p.orr_hypotheses:
         attempts += 1
-        a = int(rng.choice(seeds))
+        a = int(rng.integers(len(pts)))
         # Papazov draws the second point at a fixed distance from the first: a
         # share of the model size, so both points often lie on one object.
         radius = float(rng.uniform(0.3, 0.8) * np.median(diameters))
@@ -35,7 +33,6 @@ def orr_hypotheses(recognizer, cloud, view, rng):
         idx = np.asarray(idx)
         if len(idx) < 2:
             continue
-        idx = idx[view.off_background[idx]]
         far = idx[np.linalg.norm(pts[idx] - pts[a], axis=1) > 0.6 * radius]
         if len(far) == 0:
             continue

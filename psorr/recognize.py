@@ -19,12 +19,12 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from psorr.box_overlap import boxes_to_arrays, intersection_ratio, overlap_candidates, transform_box
+from psorr.box_overlap import boxes_to_arrays, intersection_ratio, overlap_candidates
 from psorr.decomposition import DecomposeParams, decompose
 from psorr.errors import InvalidInputError
 from psorr.library import ModelLibrary
 from psorr.orr import orr_hypotheses
-from psorr.types import Detection, PointCloud, PrimitiveKind
+from psorr.types import Detection, OrientedBox, PointCloud, PrimitiveKind
 from psorr.verify import CheckParams, SceneView, check_pose, refine_icp
 
 METHODS = ("psorr", "orr")
@@ -102,21 +102,60 @@ def _cluster(poses, models, library, cell, limit):
     return poses[best], models[best]
 
 
-def _box_score(model, T, scene_boxes, thickness: float) -> float:
-    """Share of the model's sensor-facing primitive volume that scene boxes cover."""
-    boxes, weights = [], []
+_COS_AGREE = np.cos(np.radians(20.0))
+
+
+def _agree(model_prim, R, scene_prim) -> bool:
+    """Same kind, and orientation within 20 degrees (and radius within 30 %):
+    a box overlap between a wall and a floor says nothing for the pose."""
+    if model_prim.kind is not scene_prim.kind:
+        return False
+    if model_prim.kind is PrimitiveKind.PLANE:
+        return (R @ model_prim.normal) @ scene_prim.normal > _COS_AGREE
+    return (abs((R @ model_prim.axis) @ scene_prim.axis) > _COS_AGREE
+            and abs(model_prim.radius - scene_prim.radius) < 0.3 * model_prim.radius)
+
+
+def _moved(box: OrientedBox, T: np.ndarray) -> OrientedBox:
+    # transform_box validates T every call; hypotheses come from frame algebra
+    # and are rigid by construction, and this runs for every primitive of every one.
+    return OrientedBox(T[:3, :3] @ box.center + T[:3, 3], T[:3, :3] @ box.rotation, box.extent)
+
+
+def _box_score(model, T, scene_prims, thickness: float) -> float:
+    """Area-weighted mean, over the model's sensor-facing primitives, of the
+    share of each (thickened) primitive box that an agreeing scene primitive's
+    box covers."""
+    R = T[:3, :3]
+    prims, boxes, weights = [], [], []
     for p in model.graph.primitives:
-        box = transform_box(p.box, T)
-        if p.kind is PrimitiveKind.PLANE and (T[:3, :3] @ p.normal) @ -box.center <= 0:
+        box = _moved(p.box, T)
+        if p.kind is PrimitiveKind.PLANE and (R @ p.normal) @ -box.center <= 0:
             continue  # faces away from the sensor: no scene box can match it
+        prims.append(p)
         boxes.append(box)
-        weights.append(max(p.box.volume, 1e-9) + 1e-6 * p.n_points)
-    if not boxes or not scene_boxes:
+        weights.append(p.n_points)  # surface area (samples are even); a flat box's volume is ~0
+    if not boxes or not scene_prims:
         return 0.0
-    near = overlap_candidates(*boxes_to_arrays(boxes), *boxes_to_arrays(scene_boxes))
-    covered = [max((intersection_ratio(b, scene_boxes[j], thickness) for j in np.flatnonzero(near[i])), default=0.0)
+    near = overlap_candidates(*boxes_to_arrays(boxes), *boxes_to_arrays([s.box for s in scene_prims]))
+    covered = [max((intersection_ratio(b, scene_prims[j].box, thickness) for j in np.flatnonzero(near[i])
+                    if _agree(prims[i], R, scene_prims[j])), default=0.0)
                for i, b in enumerate(boxes)]
     return float(np.average(covered, weights=weights))
+
+
+def _share_out(order, models, limit):
+    """Up to `limit` of the ranked hypotheses, taken round-robin across models
+    so that one model's many near-duplicates cannot fill every slot."""
+    queues = {}
+    for k in order:
+        queues.setdefault(int(models[k]), []).append(k)
+    chosen = []
+    while len(chosen) < limit and any(queues.values()):
+        for queue in queues.values():
+            if queue and len(chosen) < limit:
+                chosen.append(queue.pop(0))
+    return chosen
 
 
 class Recognizer:
@@ -161,13 +200,13 @@ class Recognizer:
             return [], 0, 0.0, decomposition_ms
         poses, models = self.library.table.poses(scene_index, rows, pts[i], nrm[i], pts[j])
         poses, models = _cluster(poses, models, self.library, p.cluster_cell, p.max_hypotheses)
-        scene_boxes = [scene.primitives[k].box for k in used]
+        scene_prims = [scene.primitives[k] for k in used]
         t1 = time.perf_counter()
-        scores = np.array([_box_score(self.library.models[m], T, scene_boxes, p.box_thickness)
+        scores = np.array([_box_score(self.library.models[m], T, scene_prims, p.box_thickness)
                            for T, m in zip(poses, models)])
         verify_ms = (time.perf_counter() - t1) * 1e3
         order = np.argsort(-scores, kind="stable")
-        order = order[scores[order] >= p.min_box_score][: p.refine_top]
+        order = _share_out(order[scores[order] >= p.min_box_score], models, p.refine_top)
         return [(models[k], poses[k]) for k in order], len(poses), verify_ms, decomposition_ms
 
     def _accept(self, view, candidates) -> list[Detection]:

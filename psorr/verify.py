@@ -77,21 +77,27 @@ class SceneView:
         depth[(v * self.width + u)[order]] = pts[order, 2]
         self.depth = depth
         down = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(pts)).voxel_down_sample(icp_voxel)
-        down.estimate_normals(o3d.geometry.KDTreeSearchParamHybrid(radius=3 * icp_voxel, max_nn=20))
-        down.orient_normals_towards_camera_location(np.zeros(3))
-        self.icp_target = down
-        # The supporting plane (the largest one) explains any pose that sinks a
-        # model face into it, so its pixels never count as support.
-        self.background = np.zeros(self.width * self.height, dtype=bool)
-        self.off_background = np.ones(len(down.points), dtype=bool)
+        self.down = down
+        self.down_tree = o3d.geometry.KDTreeFlann(down)
+        # The supporting plane (the largest one, normal towards the sensor): no
+        # part can sit below it, and ORR samples what stands on it.
+        self.support_plane = None
+        keep = np.ones(len(down.points), dtype=bool)
         if len(down.points) >= 3:
             o3d.utility.random.seed(0)
             plane, inliers = down.segment_plane(distance_threshold=0.008, ransac_n=3, num_iterations=200)
             if len(inliers) > 0.2 * len(down.points):
-                a, b, c, d = plane
-                on_plane = np.abs(pts @ np.array([a, b, c]) + d) < 0.008
-                self.background[(v * self.width + u)[on_plane]] = True
-                self.off_background[np.asarray(inliers)] = False
+                plane = np.asarray(plane, float) / np.linalg.norm(plane[:3])
+                self.support_plane = plane if plane[3] > 0 else -plane  # origin on the positive side
+                keep[np.asarray(inliers)] = False
+        objects = down.select_by_index(np.flatnonzero(keep).tolist())
+        if len(objects.points) >= 3:
+            objects.estimate_normals(o3d.geometry.KDTreeSearchParamHybrid(radius=3 * icp_voxel, max_nn=20))
+            objects.orient_normals_towards_camera_location(np.zeros(3))
+        self.objects = objects
+        self.object_points = np.asarray(objects.points)
+        self.object_tree = o3d.geometry.KDTreeFlann(objects) if len(objects.points) else None
+        self.icp_voxel = icp_voxel
 
     def project(self, points: np.ndarray):
         """Pixel (u, v) of (N, 3) points and an in-bounds mask (N,)."""
@@ -129,28 +135,42 @@ def check_pose(view: SceneView, model_points, model_normals, T_cloud_model, para
     observed = view.depth[pixel]
     z = pts[visible, 2]
     tol = depth_tolerance(z, params)
-    support = (np.abs(z - observed) < tol) & ~view.background[pixel]
+    support = np.abs(z - observed) < tol
     violation = np.isfinite(observed) & (z < observed - tol)
     occluded = np.isfinite(observed) & (z > observed + tol)
+    n_violation = int(violation.sum())
+    if view.support_plane is not None:
+        # Model points under the supporting plane are impossible: a pose that
+        # sinks a part into the table would otherwise pass on the table's points.
+        below = pts @ view.support_plane[:3] + view.support_plane[3] < -np.maximum(tol.min(), 0.005)
+        n_violation += int(below.sum() * len(visible) / len(pts))
     # Blocks, not pixels: two poses of one instance check different samples of
     # its points, so only coarse cells tell that they explain the same surface.
     blocks = (v // _SELF_BLOCK) * (view.width // _SELF_BLOCK + 1) + u // _SELF_BLOCK
-    return PoseCheck(len(visible), int(support.sum()), int(violation.sum()), int(occluded.sum()),
-                     np.unique(blocks[support]))
+    return PoseCheck(len(visible), int(support.sum()), n_violation, int(occluded.sum()), np.unique(blocks[support]))
 
 
 def refine_icp(view: SceneView, model_points, model_normals, T_cloud_model, max_distance: float,
-               iterations: int = 30) -> np.ndarray:
-    """Point-to-plane ICP of the model's visible points onto the scene; returns the refined pose."""
+               iterations: int = 30, reach: float = 0.1) -> np.ndarray:
+    """Point-to-plane ICP of the model's visible points onto the scene points
+    within `reach` metres of them; returns the refined pose."""
     R, t = T_cloud_model[:3, :3], T_cloud_model[:3, 3]
     stride = max(1, len(model_points) // 3000)
     pts, nrm = model_points[::stride] @ R.T + t, model_normals[::stride] @ R.T
     visible = visible_model_points(view, pts, nrm)
     if len(visible) < 10:
         return T_cloud_model
+    # A target cropped to the hypothesis keeps Open3D's per-call k-d tree small.
+    centre = pts[visible].mean(axis=0)
+    _, near, _ = view.down_tree.search_radius_vector_3d(centre, reach + float(np.ptp(pts[visible], axis=0).max()))
+    if len(near) < 10:
+        return T_cloud_model
+    target = view.down.select_by_index(list(near))
+    target.estimate_normals(o3d.geometry.KDTreeSearchParamHybrid(radius=3 * view.icp_voxel, max_nn=20))
+    target.orient_normals_towards_camera_location(np.zeros(3))
     source = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(pts[visible]))
     result = o3d.pipelines.registration.registration_icp(
-        source, view.icp_target, max_distance, np.eye(4),
+        source, target, max_distance, np.eye(4),
         o3d.pipelines.registration.TransformationEstimationPointToPlane(),
         o3d.pipelines.registration.ICPConvergenceCriteria(max_iteration=iterations))
     return np.asarray(result.transformation) @ T_cloud_model
