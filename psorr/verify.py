@@ -151,7 +151,7 @@ def check_pose(view: SceneView, model_points, model_normals, T_cloud_model, para
 
 
 def refine_icp(view: SceneView, model_points, model_normals, T_cloud_model, max_distance: float,
-               iterations: int = 30, reach: float = 0.1) -> np.ndarray:
+               iterations: int = 30, reach: float = 0.03) -> np.ndarray:
     """Point-to-plane ICP of the model's visible points onto the scene points
     within `reach` metres of them; returns the refined pose."""
     R, t = T_cloud_model[:3, :3], T_cloud_model[:3, 3]
@@ -162,11 +162,12 @@ def refine_icp(view: SceneView, model_points, model_normals, T_cloud_model, max_
         return T_cloud_model
     # A target cropped to the hypothesis keeps Open3D's per-call k-d tree small.
     centre = pts[visible].mean(axis=0)
-    _, near, _ = view.down_tree.search_radius_vector_3d(centre, reach + float(np.ptp(pts[visible], axis=0).max()))
+    radius = reach + 0.5 * float(np.linalg.norm(np.ptp(pts[visible], axis=0)))
+    _, near, _ = view.down_tree.search_radius_vector_3d(centre, radius)
     if len(near) < 10:
         return T_cloud_model
     target = view.down.select_by_index(list(near))
-    target.estimate_normals(o3d.geometry.KDTreeSearchParamHybrid(radius=3 * view.icp_voxel, max_nn=20))
+    target.estimate_normals(o3d.geometry.KDTreeSearchParamHybrid(radius=3 * view.icp_voxel, max_nn=12))
     target.orient_normals_towards_camera_location(np.zeros(3))
     source = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(pts[visible]))
     result = o3d.pipelines.registration.registration_icp(
