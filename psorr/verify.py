@@ -18,7 +18,7 @@ import open3d as o3d
 from psorr.kinect_noise import KINECT_V1
 from psorr.types import PointCloud
 
-FOCAL = 525.0  # pixels: a Kinect v1's, so the buffer matches its resolution
+KINECT_FOCAL = 525.0  # pixels of a 640-wide Kinect v1 image
 _SELF_BLOCK = 4  # pixels: model samples are sparser than pixels, so self-occlusion is judged per block
 
 
@@ -60,6 +60,21 @@ def depth_tolerance(z: np.ndarray, params: CheckParams) -> np.ndarray:
     return np.maximum(params.min_tolerance, params.sigmas * sigma)
 
 
+def buffer_focal(cloud: PointCloud, ux: np.ndarray, uy: np.ndarray) -> float:
+    """Focal length (pixels) at which the cloud fills its depth buffer: an
+    organised cloud's own (a Kinect scaled to its width), else one pixel per
+    median angular gap between neighbouring points. A fixed 640-wide focal
+    would leave a 320x240 cloud's buffer three-quarters empty."""
+    if cloud.is_organised:
+        return KINECT_FOCAL * cloud.width / 640.0
+    from scipy.spatial import cKDTree
+
+    rays = np.column_stack([ux, uy])[:: max(1, len(ux) // 20000)]
+    gap, _ = cKDTree(rays).query(rays, k=2)
+    spacing = float(np.median(gap[:, 1]))
+    return 1.0 / spacing if spacing > 0 else KINECT_FOCAL
+
+
 class SceneView:
     """A depth buffer of a cloud from its sensor origin, plus an Open3D copy for ICP."""
 
@@ -68,9 +83,10 @@ class SceneView:
         pts = pts[pts[:, 2] > 1e-3]
         self.points = pts
         ux, uy = pts[:, 0] / pts[:, 2], pts[:, 1] / pts[:, 2]
-        self.cx, self.cy = -FOCAL * ux.min() + 2, -FOCAL * uy.min() + 2
-        self.width = int(FOCAL * (ux.max() - ux.min())) + 5
-        self.height = int(FOCAL * (uy.max() - uy.min())) + 5
+        self.focal = buffer_focal(cloud, ux, uy)
+        self.cx, self.cy = -self.focal * ux.min() + 2, -self.focal * uy.min() + 2
+        self.width = int(self.focal * (ux.max() - ux.min())) + 5
+        self.height = int(self.focal * (uy.max() - uy.min())) + 5
         u, v, _ = self.project(pts)
         depth = np.full(self.width * self.height, np.inf)
         order = np.argsort(-pts[:, 2], kind="stable")  # far first, so the nearest point wins each pixel
@@ -102,8 +118,8 @@ class SceneView:
     def project(self, points: np.ndarray):
         """Pixel (u, v) of (N, 3) points and an in-bounds mask (N,)."""
         z = np.maximum(points[:, 2], 1e-9)
-        u = np.round(FOCAL * points[:, 0] / z + self.cx).astype(np.int64)
-        v = np.round(FOCAL * points[:, 1] / z + self.cy).astype(np.int64)
+        u = np.round(self.focal * points[:, 0] / z + self.cx).astype(np.int64)
+        v = np.round(self.focal * points[:, 1] / z + self.cy).astype(np.int64)
         inside = (u >= 0) & (u < self.width) & (v >= 0) & (v < self.height) & (points[:, 2] > 1e-3)
         return np.clip(u, 0, self.width - 1), np.clip(v, 0, self.height - 1), inside
 
