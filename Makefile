@@ -36,6 +36,7 @@ demo: setup
 
 bench: setup
 	$(BIN)/python benchmarks/decompose.py
+	$(BIN)/python benchmarks/table1.py
 
 lint: setup
 	$(BIN)/ruff check psorr sim tests benchmarks
