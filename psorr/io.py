@@ -20,6 +20,7 @@ format  points  normals  colours  labels  organised  notes
 from __future__ import annotations
 
 import io
+import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -270,6 +271,11 @@ def write_cloud(
         raise InvalidInputError("cannot write a cloud with zero points; no reader would accept it")
     if compressed and (suffix != ".pcd" or not binary):
         raise InvalidInputError("compressed=True applies to binary .pcd files only")
+    lost = [name for name in ("colors", "labels") if getattr(cloud, name) is not None]
+    if suffix in (".xyz", ".txt", ".npy") and lost:
+        # Nothing is dropped without a word: these formats hold points and normals only.
+        warnings.warn(f"{path.name}: {suffix} keeps points and normals only; the cloud's "
+                      f"{' and '.join(lost)} are not written (use .pcd or .ply to keep them)", stacklevel=2)
     if suffix == ".pcd":
         data = encode_pcd(cloud, "binary_compressed" if compressed else
                           "binary" if binary else "ascii")

@@ -490,3 +490,9 @@ def test_read_mesh_errors(tmp_path):
     _expect_mesh_error(tmp_path / "lines.obj", "lines.obj")
     (tmp_path / "junk.stl").write_bytes(b"\x00" * 90)
     _expect_mesh_error(tmp_path / "junk.stl", "junk.stl")
+
+
+def test_writing_labels_to_a_format_without_them_warns(tmp_path):
+    cloud = PointCloud(np.zeros((3, 3)), labels=[1, 2, 3])
+    with pytest.warns(UserWarning, match="labels are not written"):
+        write_cloud(tmp_path / "plain.xyz", cloud)
