@@ -51,6 +51,10 @@ class TrainParams:
         sensor_noise=False, voxel_size=0.003, min_inlier_distance=0.0008, min_points=8,
         cylinder_radius_range=(0.003, 0.2), k_neighbours=10))
 
+    def __post_init__(self):
+        if not self.sample_spacing > 0 or not self.min_primitive_area >= 0 or self.pair_points < 2:
+            raise InvalidInputError("TrainParams needs sample_spacing > 0, min_primitive_area >= 0, pair_points >= 2")
+
     def fingerprint(self) -> str:
         return json.dumps(asdict(self), sort_keys=True, default=str)
 

@@ -48,6 +48,17 @@ class RecognizeParams:
     min_support: int = 60
     max_shared_pixels: float = 0.3      # a detection sharing more of its pixels with a better one is dropped
 
+    def __post_init__(self):
+        for name in ("max_hypotheses", "refine_top", "orr_hypotheses", "min_support"):
+            if int(getattr(self, name)) < 1:
+                raise InvalidInputError(f"RecognizeParams.{name} must be >= 1, got {getattr(self, name)}")
+        for name in ("cluster_cell", "box_thickness", "icp_distance"):
+            if not getattr(self, name) > 0:
+                raise InvalidInputError(f"RecognizeParams.{name} must be > 0 metres, got {getattr(self, name)}")
+        for name in ("min_box_score", "min_visible_fraction", "max_violation_ratio", "max_shared_pixels"):
+            if not 0 <= getattr(self, name) <= 1:
+                raise InvalidInputError(f"RecognizeParams.{name} must lie in [0, 1], got {getattr(self, name)}")
+
 
 @dataclass(frozen=True)
 class RecognitionStats:

@@ -72,3 +72,15 @@ def test_not_a_library_is_a_clear_error(tmp_path):
     bad.write_bytes(b"nonsense")
     with pytest.raises(CloudFileError, match="models.npz"):
         ModelLibrary.load(bad)
+
+
+def test_bad_settings_name_the_field():
+    from psorr.library import TrainParams
+    from psorr.recognize import RecognizeParams
+
+    with pytest.raises(Exception, match="refine_top"):
+        RecognizeParams(refine_top=0)
+    with pytest.raises(Exception, match="min_visible_fraction"):
+        RecognizeParams(min_visible_fraction=1.5)
+    with pytest.raises(Exception, match="TrainParams"):
+        TrainParams(sample_spacing=0)
