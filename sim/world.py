@@ -1,0 +1,382 @@
+"""The robot cell, assembled in code with ``mujoco.MjSpec`` (the only place a scene is built).
+
+World frame: metres, z up, origin on the floor below the table's centre. The table top is at
+``table_height``; the arm (``sim/robot.py``, attached with the prefix ``"arm/"``) stands on it
+``arm_inset`` from the -x edge and faces +x. Each workpiece is a free body named after its
+catalog part, whose body frame is the part's model frame (origin at the centre of the resting
+face, +z up): the catalog STL is its visual mesh, the CoACD parts from
+``assets/workpieces/collision`` its collision meshes. Each part has a fixture: a pocket of four
+thin walls on the table, ``fixture_clearance`` wider than the part's footprint on every side; a
+part seated in it has the fixture's pose. A fixed camera (``"kinect"``, Kinect v1 intrinsics)
+looks at the table from the +x side. Keyframe ``"home"``: arm at home, parts settled.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from types import MappingProxyType
+
+import mujoco
+import numpy as np
+
+from psorr.camera import CameraIntrinsics
+from psorr.errors import InvalidInputError, PsorrError
+from psorr.workpieces import WorkpieceInfo, load_catalog
+from sim.robot import ArmConfig, apply_arm_options, load_arm_spec
+from sim.sensor import KINECT_V1_CAMERA, T_world_camera_opencv, check_intrinsics, fovy_deg
+
+COLLISION_DIR = Path(__file__).resolve().parents[1] / "assets" / "workpieces" / "collision"
+"""CoACD collision parts and their index.json, written by assets/workpieces/build_collision.py."""
+CAMERA_NAME = "kinect"
+ARM_PREFIX = "arm/"
+HOME_KEY = "home"
+_GEOM = mujoco.mjtGeom
+_REBUILD = "build them with: .venv/bin/python assets/workpieces/build_collision.py"
+
+
+class WorldBuildError(PsorrError):
+    """The world cannot be assembled as configured; the message names the cause and the fix."""
+
+
+@dataclass(frozen=True)
+class WorldConfig:
+    """What to build (metres, degrees, seconds).
+
+    Attributes:
+        workpieces: catalog part names to place, each once (``psorr.workpieces.load_catalog()``).
+        table_size: (x, y) of the table top; the arm stands at the -x edge.
+        table_height: height of the table top above the floor.
+        arm_inset: distance of the arm's base axis from the table's -x edge.
+        camera_height: camera height above the table top, in [0.6, 1.0].
+        camera_tilt_deg: angle of the optical axis from straight down, in [0, 45]; the camera
+            stands on the +x side and leans towards the arm.
+        camera_target: (x, y) of the table-top point on the optical axis.
+        fixtures: add one fixture per workpiece.
+        fixture_clearance: gap between a part's footprint and its fixture's walls, per side.
+        fixture_wall: (thickness, height) of the fixture walls.
+        reach: (min, max) horizontal distance from the arm's base axis to anything placed.
+        gap: least distance between placed footprints.
+        drop_height: height above the table the parts are released from.
+        settle_time: simulated time the parts are left to settle before the home keyframe.
+        intrinsics: the camera; MuJoCo needs fx == fy and a centred principal point.
+    """
+
+    workpieces: tuple[str, ...] = ("u_channel", "chassis", "transformer", "flanged_hub")
+    table_size: tuple[float, float] = (0.9, 1.0)
+    table_height: float = 0.75
+    arm_inset: float = 0.1
+    camera_height: float = 0.8
+    camera_tilt_deg: float = 30.0
+    camera_target: tuple[float, float] = (0.0, 0.0)
+    fixtures: bool = True
+    fixture_clearance: float = 0.004
+    fixture_wall: tuple[float, float] = (0.006, 0.012)
+    reach: tuple[float, float] = (0.25, 0.7)
+    gap: float = 0.02
+    drop_height: float = 0.003
+    settle_time: float = 0.5
+    intrinsics: CameraIntrinsics = KINECT_V1_CAMERA
+
+    def __post_init__(self):
+        object.__setattr__(self, "workpieces", tuple(self.workpieces))
+        if not self.workpieces or len(set(self.workpieces)) != len(self.workpieces):
+            raise InvalidInputError(f"workpieces must name at least one part, each once; got {self.workpieces}")
+        if not 0.6 <= self.camera_height <= 1.0:
+            raise InvalidInputError(f"camera_height must lie in [0.6, 1.0] m, got {self.camera_height}")
+        if not 0.0 <= self.camera_tilt_deg <= 45.0:
+            raise InvalidInputError(f"camera_tilt_deg must lie in [0, 45], got {self.camera_tilt_deg}")
+        if min(*self.table_size, self.table_height, *self.fixture_wall, self.fixture_clearance) <= 0:
+            raise InvalidInputError("table_size, table_height, fixture_wall and fixture_clearance must be > 0")
+        if not 0 <= self.reach[0] < self.reach[1] or min(self.gap, self.drop_height, self.settle_time) < 0:
+            raise InvalidInputError("reach must be (min, max) with 0 <= min < max; gap, drop_height, settle_time >= 0")
+        check_intrinsics(self.intrinsics)
+
+
+@dataclass(frozen=True, eq=False)
+class World:
+    """A built cell. Poses are (4, 4) read-only arrays in the world frame (metres).
+
+    Attributes:
+        config: what was built.
+        spec: the MjSpec it was compiled from (edit and ``spec.compile()`` for variants).
+        model, data: the compiled model and a data at the ``"home"`` keyframe, forwarded.
+        arm: the arm's names in this model (prefixed ``"arm/"``).
+        workpieces: body names of the workpieces (= their catalog names), in config order.
+        catalog: catalog entry of each workpiece.
+        T_world_workpieces: settled pose of each workpiece's body (= model frame) at home.
+        T_world_fixtures: per workpiece, the pose its model frame has when seated in its fixture.
+        T_world_camera: the camera's pose with OpenCV axes (x right, y down, z forward).
+        camera_name: the camera to render (``sim.sensor.DepthCamera(model, camera_name)``).
+        table_top: z of the table top.
+        T_world_arm_base: pose of the arm's mounting frame.
+    """
+
+    config: WorldConfig
+    spec: mujoco.MjSpec
+    model: mujoco.MjModel
+    data: mujoco.MjData
+    arm: ArmConfig
+    workpieces: tuple[str, ...]
+    catalog: MappingProxyType
+    T_world_workpieces: MappingProxyType
+    T_world_fixtures: MappingProxyType
+    T_world_camera: np.ndarray
+    camera_name: str
+    table_top: float
+    T_world_arm_base: np.ndarray
+
+    def reset(self, data: mujoco.MjData | None = None) -> mujoco.MjData:
+        """Put ``data`` (default: ``self.data``) at the home keyframe and forward it; return it."""
+        data = self.data if data is None else data
+        mujoco.mj_resetDataKeyframe(self.model, data, self.model.key(HOME_KEY).id)
+        mujoco.mj_forward(self.model, data)
+        return data
+
+    def body_pose(self, name: str, data: mujoco.MjData | None = None) -> np.ndarray:
+        """Pose (4, 4) of body ``name`` in ``data`` (default ``self.data``; kinematics must be current)."""
+        data = self.data if data is None else data
+        body_id = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, name)
+        if body_id < 0:
+            raise InvalidInputError(f"the world has no body {name!r}; workpieces are {list(self.workpieces)}")
+        return _pose(data.xpos[body_id], data.xmat[body_id].reshape(3, 3))
+
+
+def _pose(p, R) -> np.ndarray:
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = R, p
+    return T
+
+
+def _quat(R) -> np.ndarray:
+    q = np.zeros(4)
+    mujoco.mju_mat2Quat(q, np.ascontiguousarray(R, dtype=float).ravel())
+    return q
+
+
+def _yaw(theta: float) -> np.ndarray:
+    c, s = math.cos(theta), math.sin(theta)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def collision_index() -> dict:
+    """The CoACD index: part name -> {"files": [...], ...}; WorldBuildError if it was never built."""
+    path = COLLISION_DIR / "index.json"
+    if not path.is_file():
+        raise WorldBuildError(f"{path} is missing: the workpieces' collision parts are not built; {_REBUILD}")
+    return json.loads(path.read_text())["parts"]
+
+
+def _add_boxes(spec, body, name: str, boxes, material: str) -> None:
+    """A visual and a collision box geom per (centre, half sizes) in ``body``'s frame."""
+    vis, col = spec.find_default("visual"), spec.find_default("collision")
+    for k, (centre, half) in enumerate(boxes):
+        suffix = f"_{k}" if len(boxes) > 1 else ""
+        body.add_geom(default=vis, name=f"{name}_visual{suffix}", type=_GEOM.mjGEOM_BOX, pos=centre, size=half,
+                      material=material)
+        body.add_geom(default=col, name=f"{name}_collision{suffix}", type=_GEOM.mjGEOM_BOX, pos=centre, size=half)
+
+
+def _scene(spec: mujoco.MjSpec, cfg: WorldConfig) -> None:
+    """Options, defaults, materials, floor, light, table and camera."""
+    apply_arm_options(spec)
+    spec.modelname = "psorr_cell"
+    spec.visual.global_.offwidth = max(640, cfg.intrinsics.width)
+    spec.visual.global_.offheight = max(480, cfg.intrinsics.height)
+    vis = spec.add_default("visual", spec.default)
+    vis.geom.contype, vis.geom.conaffinity, vis.geom.group, vis.geom.density = 0, 0, 2, 0.0
+    spec.add_default("collision", spec.default).geom.group = 3
+    for name, rgba in (("floor", (0.32, 0.34, 0.37, 1)), ("table", (0.62, 0.63, 0.65, 1)),
+                       ("fixture", (0.12, 0.13, 0.15, 1))):
+        spec.add_material(name=name, rgba=rgba, specular=0.2)
+    spec.worldbody.add_geom(name="floor", type=_GEOM.mjGEOM_PLANE, size=[0, 0, 0.05], material="floor")
+    spec.worldbody.add_light(name="top_light", pos=[0, 0, cfg.table_height + 1.8], dir=[0, 0, -1],
+                             diffuse=[0.7, 0.7, 0.7], castshadow=True)
+    tx, ty, top, t = cfg.table_size[0] / 2, cfg.table_size[1] / 2, cfg.table_height, 0.04
+    body = spec.worldbody.add_body(name="table", pos=[0, 0, top - t / 2])
+    _add_boxes(spec, body, "table", [([0, 0, 0], [tx, ty, t / 2])], "table")
+    legs = [([sx * (tx - 0.04), sy * (ty - 0.04), -top / 2], [0.025, 0.025, (top - t) / 2])
+            for sx in (-1, 1) for sy in (-1, 1)]
+    for k, (centre, half) in enumerate(legs):
+        body.add_geom(default=vis, name=f"table_leg_visual_{k}", type=_GEOM.mjGEOM_BOX, pos=centre, size=half,
+                      material="table")
+    theta = math.radians(cfg.camera_tilt_deg)
+    target = np.array([*cfg.camera_target, top])
+    eye = target + cfg.camera_height * np.array([math.tan(theta), 0.0, 1.0])
+    # MuJoCo camera axes: x = image right (+y: the camera faces -x), y = image up (towards the arm), z = -forward.
+    right, up = np.array([0.0, 1.0, 0.0]), np.array([-math.cos(theta), 0.0, math.sin(theta)])
+    spec.worldbody.add_camera(name=CAMERA_NAME, pos=eye, quat=_quat(np.column_stack([right, up, np.cross(right, up)])),
+                              fovy=fovy_deg(cfg.intrinsics))
+
+
+def _footprint(bounds, x: float, y: float, yaw: float, pad: float) -> np.ndarray:
+    """(4, 2) world corners of a model-frame footprint ``bounds`` ((2,) lo, (2,) hi) grown by ``pad``."""
+    (x0, y0), (x1, y1) = bounds[0] - pad, bounds[1] + pad
+    return np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]]) @ _yaw(yaw)[:2, :2].T + (x, y)
+
+
+def _overlap(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether two convex quads (4, 2) overlap (separating axis test)."""
+    for edge in np.concatenate([np.roll(a, -1, axis=0) - a, np.roll(b, -1, axis=0) - b]):
+        pa, pb = a @ (-edge[1], edge[0]), b @ (-edge[1], edge[0])
+        if pa.max() < pb.min() or pb.max() < pa.min():
+            return False
+    return True
+
+
+def _place(cfg: WorldConfig, items, base_xy, bare: mujoco.MjModel, home: str, rng: np.random.Generator) -> dict:
+    """Seeded non-overlapping (x, y, yaw) for each (key, bounds, pad): on the table, in reach, and seen by
+    the camera past the arm at home (``bare`` holds only table, arm and camera)."""
+    data = mujoco.MjData(bare)
+    mujoco.mj_resetDataKeyframe(bare, data, bare.key(home).id)
+    mujoco.mj_forward(bare, data)
+    T_world_camera = T_world_camera_opencv(bare, data, CAMERA_NAME)
+    T_camera_world, eye = np.linalg.inv(T_world_camera), T_world_camera[:3, 3]
+    half, top, size = np.asarray(cfg.table_size) / 2, cfg.table_height, np.array(cfg.intrinsics.shape[::-1])
+    groups, table = np.array([0, 0, 1, 0, 0, 0], np.uint8), bare.body("table").id
+
+    def fits(quad) -> bool:
+        dist = np.linalg.norm(quad - base_xy, axis=1)
+        if np.any(np.abs(quad) > half - 0.02) or dist.min() < cfg.reach[0] or dist.max() > cfg.reach[1]:
+            return False
+        points = np.column_stack([np.vstack([quad, quad.mean(0)]), np.full(5, top + 0.005)])
+        uv = cfg.intrinsics.project(points @ T_camera_world[:3, :3].T + T_camera_world[:3, 3])
+        if not (np.all(np.isfinite(uv)) and np.all(uv >= 20) and np.all(uv <= size - 21)):
+            return False
+        for point in points:  # nothing of the arm (visual group 2) between the camera and the point
+            ray, geom = point - eye, np.array([-1], np.int32)
+            hit = mujoco.mj_ray(bare, data, eye, ray / np.linalg.norm(ray), groups, 1, table, geom)
+            if 0 <= hit < np.linalg.norm(ray):
+                return False
+        return True
+
+    placed, quads = {}, []
+    for key, bounds, pad in sorted(items, key=lambda it: -np.prod(it[1][1] - it[1][0] + 2 * it[2])):
+        for _ in range(1000):
+            pose = (rng.uniform(-half[0], half[0]), rng.uniform(-half[1], half[1]), rng.uniform(0.0, 2 * np.pi))
+            quad = _footprint(bounds, *pose, pad)
+            if not any(_overlap(quad, other) for other in quads) and fits(quad):
+                placed[key] = pose
+                quads.append(quad)
+                break
+        else:
+            raise WorldBuildError(
+                f"found no free spot for {key} on the table: place fewer workpieces (got {len(cfg.workpieces)}), "
+                f"enlarge table_size or reach, or set fixtures=False"
+            )
+    return placed
+
+
+def _add_workpiece(spec, info: WorkpieceInfo, files: list[str], mesh, pos, quat) -> None:
+    """A free body for ``info``: visual STL, CoACD collision hulls, the catalog's mass and colour."""
+    name = info.name
+    spec.add_mesh(name=name, file=str(info.mesh_path))
+    spec.add_material(name=f"{name}_material", rgba=[*info.color, 1.0], specular=0.3)
+    body = spec.worldbody.add_body(name=name, pos=pos, quat=quat)
+    body.add_freejoint(name=f"{name}_joint")
+    body.explicitinertial = True
+    body.mass = info.mass
+    body.ipos = mesh.center_mass
+    I = mesh.moment_inertia * (info.mass / mesh.mass)  # noqa: E741 - about the centre of mass, model axes
+    body.fullinertia = [I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2]]
+    body.add_geom(default=spec.find_default("visual"), name=f"{name}_visual", type=_GEOM.mjGEOM_MESH, meshname=name,
+                  material=f"{name}_material")
+    for k, file in enumerate(files):
+        spec.add_mesh(name=f"{name}_collision_{k}", file=str(COLLISION_DIR / file))
+        body.add_geom(default=spec.find_default("collision"), name=f"{name}_collision_{k}", type=_GEOM.mjGEOM_MESH,
+                      meshname=f"{name}_collision_{k}")
+
+
+def _fixture_walls(bounds, cfg: WorldConfig):
+    """(centre, half size) of the 4 walls of a pocket around ``bounds``, in the fixture (= seated part) frame."""
+    (x0, y0), (x1, y1) = bounds[0] - cfg.fixture_clearance, bounds[1] + cfg.fixture_clearance
+    (t, h), cx, cy = cfg.fixture_wall, (x0 + x1) / 2, (y0 + y1) / 2
+    ends = [([x, cy, h / 2], [t / 2, (y1 - y0) / 2 + t, h / 2]) for x in (x0 - t / 2, x1 + t / 2)]
+    return ends + [([cx, y, h / 2], [(x1 - x0) / 2, t / 2, h / 2]) for y in (y0 - t / 2, y1 + t / 2)]
+
+
+def build_world(config: WorldConfig = WorldConfig(), rng: np.random.Generator | None = None) -> World:
+    """Assemble, compile and settle the cell; the same ``config`` and seed give the same world.
+
+    Args:
+        config: what to build.
+        rng: the only randomness (where the parts and fixtures go, and their yaw).
+
+    Raises:
+        InvalidInputError: an unknown workpiece name or no rng.
+        WorldBuildError: the collision parts are missing or stale, or the parts do not fit.
+    """
+    if not isinstance(rng, np.random.Generator):
+        raise InvalidInputError("build_world needs rng, a numpy.random.Generator (e.g. np.random.default_rng(0))")
+    cfg, catalog, index = config, load_catalog(), collision_index()
+    unknown = [n for n in cfg.workpieces if n not in catalog]
+    if unknown:
+        raise InvalidInputError(f"unknown workpieces {unknown}; choose from {sorted(catalog)}")
+    for name in cfg.workpieces:
+        digest = hashlib.sha256(catalog[name].mesh_path.read_bytes()).hexdigest()
+        if index.get(name, {}).get("source_sha256") != digest:
+            raise WorldBuildError(f"the collision parts of {name} are missing or older than its mesh; {_REBUILD}")
+
+    spec = mujoco.MjSpec()
+    _scene(spec, cfg)
+    base = np.array([-cfg.table_size[0] / 2 + cfg.arm_inset, 0.0, cfg.table_height])
+    spec.attach(load_arm_spec(), prefix=ARM_PREFIX, frame=spec.worldbody.add_frame(name="arm_mount", pos=base))
+    arm = ArmConfig().with_prefix(ARM_PREFIX)
+    bare = spec.compile()  # table, arm and camera only: to see where the camera sees the table
+
+    meshes = {n: catalog[n].load_mesh() for n in cfg.workpieces}
+    bounds = {n: meshes[n].bounds[:, :2] for n in cfg.workpieces}
+    items = [(n, bounds[n], cfg.gap / 2) for n in cfg.workpieces]
+    if cfg.fixtures:
+        pad = cfg.fixture_clearance + cfg.fixture_wall[0] + cfg.gap / 2
+        items += [(f"{n}_fixture", bounds[n], pad) for n in cfg.workpieces]
+    spots = _place(cfg, items, base[:2], bare, arm.home_key, rng)
+    fixtures = {}
+    for name in cfg.workpieces if cfg.fixtures else ():
+        x, y, yaw = spots[f"{name}_fixture"]
+        fixtures[name] = _pose([x, y, cfg.table_height], _yaw(yaw))
+        body = spec.worldbody.add_body(name=f"{name}_fixture", pos=[x, y, cfg.table_height], quat=_quat(_yaw(yaw)))
+        _add_boxes(spec, body, f"{name}_fixture", _fixture_walls(bounds[name], cfg), "fixture")
+    for name in cfg.workpieces:
+        x, y, yaw = spots[name]
+        pos = [x, y, cfg.table_height + cfg.drop_height]
+        _add_workpiece(spec, catalog[name], index[name]["files"], meshes[name], pos, _quat(_yaw(yaw)))
+
+    # Settle the dropped parts with the arm holding home, then make their rest the initial state.
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    key = model.key(arm.home_key)
+    mujoco.mj_resetDataKeyframe(model, data, key.id)
+    for _ in range(round(cfg.settle_time / model.opt.timestep)):
+        mujoco.mj_step(model, data)
+    home_qpos = key.qpos.copy()
+    for name in cfg.workpieces:
+        adr = model.joint(f"{name}_joint").qposadr[0]
+        home_qpos[adr:adr + 7] = data.qpos[adr:adr + 7]
+        spec.body(name).pos = data.qpos[adr:adr + 3]
+        spec.body(name).quat = data.qpos[adr + 3:adr + 7] / np.linalg.norm(data.qpos[adr + 3:adr + 7])
+    spec.add_key(name=HOME_KEY, qpos=home_qpos, ctrl=key.ctrl)
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    mujoco.mj_resetDataKeyframe(model, data, model.key(HOME_KEY).id)
+    mujoco.mj_forward(model, data)
+
+    def frozen(T):
+        T = np.array(T, dtype=np.float64)
+        T.setflags(write=False)
+        return T
+
+    bodies = {n: model.body(n).id for n in cfg.workpieces}
+    return World(
+        config=cfg, spec=spec, model=model, data=data, arm=arm, workpieces=cfg.workpieces,
+        catalog=MappingProxyType({n: catalog[n] for n in cfg.workpieces}),
+        T_world_workpieces=MappingProxyType(
+            {n: frozen(_pose(data.xpos[i], data.xmat[i].reshape(3, 3))) for n, i in bodies.items()}
+        ),
+        T_world_fixtures=MappingProxyType({n: frozen(T) for n, T in fixtures.items()}),
+        T_world_camera=frozen(T_world_camera_opencv(model, data, CAMERA_NAME)),
+        camera_name=CAMERA_NAME, table_top=cfg.table_height, T_world_arm_base=frozen(_pose(base, np.eye(3))),
+    )
