@@ -139,6 +139,7 @@ def test_ply_big_endian(tmp_path):
     _assert_points(read_cloud(tmp_path / "be.ply").points, points.astype(float))
 
 
+@pytest.mark.filterwarnings("ignore:.*keeps points and normals only")  # the loss is the point here
 @pytest.mark.parametrize("suffix", [".xyz", ".txt", ".XYZ"])
 @pytest.mark.parametrize("normals", [True, False])
 def test_xyz_round_trip(tmp_path, suffix, normals):
@@ -158,6 +159,7 @@ def test_xyz_reads_comments_and_blank_lines(tmp_path):
                    np.array([[1, 2, 3], [4, 5, 6], [np.nan] * 3]))
 
 
+@pytest.mark.filterwarnings("ignore:.*keeps points and normals only")  # the loss is the point here
 def test_npy_round_trip_unorganised_and_organised(tmp_path):
     organised = _organised_cloud()
     write_cloud(tmp_path / "o.npy", organised)
