@@ -58,7 +58,8 @@ def _recognise(cloud, scene, catalog) -> None:
     from psorr.workpieces import symmetric_add
 
     paths = [catalog[name].mesh_path for name in sorted(catalog)]
-    library = ModelLibrary.from_meshes(paths, progress=lambda xs: tqdm(xs, desc="training (cached after the first run)", file=sys.stderr))
+    library = ModelLibrary.from_meshes(
+        paths, progress=lambda xs: tqdm(xs, desc="training (cached after the first run)", file=sys.stderr))
     result = Recognizer(library).recognize(cloud, np.random.default_rng(SEED))
     stats = result.stats
     print(f"\nRecognition with {len(library)} CAD-trained models (PSORR): {len(result.detections)} detections, "
