@@ -246,13 +246,23 @@ class ArmIK:
             unknown = [g for group in key for names in group for g in names if self._no_geom(g)]
             if unknown:
                 raise InvalidInputError(f"collision_geoms names geoms the model does not have: {unknown}")
-            self._collision_limits[key] = mink.CollisionAvoidanceLimit(
-                self.model,
-                geom_pairs=[(list(a), list(b)) for a, b in key],
-                minimum_distance_from_collisions=self.collision_distance,
-                # Look further ahead than one step can move a geom, so no pair is skipped over.
-                collision_detection_distance=0.05,
-            )
+            # mink drops pairs that could not touch by contype/conaffinity; a named geom that collides with
+            # nothing (e.g. the human occluder's "human/..." capsules) is still to be kept clear of, so it
+            # counts as colliding while the pairs are listed. Distances do not depend on these bits.
+            model, named = self.model, {g for group in key for names in group for g in names}
+            ids = [i for i in (model.geom(g).id for g in named)
+                   if model.geom_contype[i] == 0 and model.geom_conaffinity[i] == 0]
+            try:
+                model.geom_contype[ids], model.geom_conaffinity[ids] = 1, 1
+                self._collision_limits[key] = mink.CollisionAvoidanceLimit(
+                    model,
+                    geom_pairs=[(list(a), list(b)) for a, b in key],
+                    minimum_distance_from_collisions=self.collision_distance,
+                    # Look further ahead than one step can move a geom, so no pair is skipped over.
+                    collision_detection_distance=0.05,
+                )
+            finally:
+                model.geom_contype[ids], model.geom_conaffinity[ids] = 0, 0
         return self._collision_limits[key]
 
     def _no_geom(self, name: str) -> bool:

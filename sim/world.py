@@ -9,6 +9,13 @@ face, +z up): the catalog STL is its visual mesh, the CoACD parts from
 thin walls on the table, ``fixture_clearance`` wider than the part's footprint on every side; a
 part seated in it has the fixture's pose. A fixed camera (``"kinect"``, Kinect v1 intrinsics)
 looks at the table from the +x side. Keyframe ``"home"``: arm at home, parts settled.
+
+With ``WorldConfig.occluder`` a human arm (``sim/occluder.py``) stands beyond the +x edge: four
+mocap capsules (``World.occluder_geoms``, geom class ``"occluder"``) that collide with nothing,
+so they never push a part, but render and can serve as collision-avoidance geoms for the robot.
+Its :class:`~sim.occluder.ReachSchedule` (``World.occluder``) is drawn from the build rng after
+the layout, so a seed gives the same layout with or without it; ``World.apply_occluder(data, t)``
+poses the arm at time t. The home keyframe holds it at rest, out of the camera's view.
 """
 
 from __future__ import annotations
@@ -26,6 +33,7 @@ import numpy as np
 from psorr.camera import CameraIntrinsics
 from psorr.errors import InvalidInputError, PsorrError
 from psorr.workpieces import WorkpieceInfo, load_catalog
+from sim.occluder import RADII, ReachSchedule, occluder_pose, segment_half_lengths
 from sim.robot import ArmConfig, apply_arm_options, load_arm_spec
 from sim.sensor import KINECT_V1_CAMERA, T_world_camera_opencv, check_intrinsics, fovy_deg
 
@@ -63,6 +71,7 @@ class WorldConfig:
         drop_height: height above the table the parts are released from.
         settle_time: simulated time the parts are left to settle before the home keyframe.
         intrinsics: the camera; MuJoCo needs fx == fy and a centred principal point.
+        occluder: add the human arm (``sim/occluder.py``) and draw its reach schedule.
     """
 
     workpieces: tuple[str, ...] = ("u_channel", "chassis", "transformer", "flanged_hub")
@@ -80,6 +89,7 @@ class WorldConfig:
     drop_height: float = 0.003
     settle_time: float = 0.5
     intrinsics: CameraIntrinsics = KINECT_V1_CAMERA
+    occluder: bool = True
 
     def __post_init__(self):
         object.__setattr__(self, "workpieces", tuple(self.workpieces))
@@ -113,6 +123,9 @@ class World:
         camera_name: the camera to render (``sim.sensor.DepthCamera(model, camera_name)``).
         table_top: z of the table top.
         T_world_arm_base: pose of the arm's mounting frame.
+        occluder: the human's reach schedule, None without the occluder.
+        occluder_geoms: names of the occluder's capsule geoms (= its mocap bodies' names), e.g.
+            ``"human/hand"``; empty without the occluder.
     """
 
     config: WorldConfig
@@ -128,6 +141,8 @@ class World:
     camera_name: str
     table_top: float
     T_world_arm_base: np.ndarray
+    occluder: ReachSchedule | None = None
+    occluder_geoms: tuple[str, ...] = ()
 
     def reset(self, data: mujoco.MjData | None = None) -> mujoco.MjData:
         """Put ``data`` (default: ``self.data``) at the home keyframe and forward it; return it."""
@@ -143,6 +158,23 @@ class World:
         if body_id < 0:
             raise InvalidInputError(f"the world has no body {name!r}; workpieces are {list(self.workpieces)}")
         return _pose(data.xpos[body_id], data.xmat[body_id].reshape(3, 3))
+
+    def apply_occluder(self, data: mujoco.MjData | None = None, t: float = 0.0,
+                       schedule: ReachSchedule | None = None) -> mujoco.MjData:
+        """Pose the occluder for time ``t`` (s) of ``schedule`` (default: ``self.occluder``) in ``data``.
+
+        Sets ``data.mocap_pos`` / ``mocap_quat`` (default ``self.data``); call ``mj_forward`` (or step)
+        before reading poses or rendering. Returns ``data``. InvalidInputError without an occluder.
+        """
+        data = self.data if data is None else data
+        schedule = self.occluder if schedule is None else schedule
+        if not self.occluder_geoms or schedule is None:
+            raise InvalidInputError("this world has no occluder: build it with WorldConfig(occluder=True)")
+        for name, T in occluder_pose(schedule, t).items():
+            mocap = self.model.body_mocapid[self.model.body(name).id]
+            data.mocap_pos[mocap] = T[:3, 3]
+            data.mocap_quat[mocap] = _quat(T[:3, :3])
+        return data
 
 
 def _pose(p, R) -> np.ndarray:
@@ -298,12 +330,26 @@ def _fixture_walls(bounds, cfg: WorldConfig):
     return ends + [([cx, y, h / 2], [(x1 - x0) / 2, t / 2, h / 2]) for y in (y0 - t / 2, y1 + t / 2)]
 
 
+def _add_occluder(spec: mujoco.MjSpec, schedule: ReachSchedule) -> tuple[str, ...]:
+    """Mocap capsule bodies of the human arm at rest, one geom each of the same name, in class ``"occluder"``."""
+    cls = spec.add_default("occluder", spec.default)
+    cls.geom.contype, cls.geom.conaffinity, cls.geom.group, cls.geom.density = 0, 0, 1, 0.0
+    spec.add_material(name="skin", rgba=(0.80, 0.62, 0.50, 1), specular=0.1)
+    half = segment_half_lengths()
+    for name, T in occluder_pose(schedule, -math.inf).items():
+        body = spec.worldbody.add_body(name=name, mocap=True, pos=T[:3, 3], quat=_quat(T[:3, :3]))
+        body.add_geom(default=cls, name=name, type=_GEOM.mjGEOM_CAPSULE,
+                      size=[RADII[name.split("/")[-1]], half[name], 0], material="skin")
+    return tuple(half)
+
+
 def build_world(config: WorldConfig = WorldConfig(), rng: np.random.Generator | None = None) -> World:
     """Assemble, compile and settle the cell; the same ``config`` and seed give the same world.
 
     Args:
         config: what to build.
-        rng: the only randomness (where the parts and fixtures go, and their yaw).
+        rng: the only randomness (where the parts and fixtures go, and their yaw; then the occluder's
+            schedule, which targets one of the parts).
 
     Raises:
         InvalidInputError: an unknown workpiece name or no rng.
@@ -344,6 +390,14 @@ def build_world(config: WorldConfig = WorldConfig(), rng: np.random.Generator | 
         x, y, yaw = spots[name]
         pos = [x, y, cfg.table_height + cfg.drop_height]
         _add_workpiece(spec, catalog[name], index[name]["files"], meshes[name], pos, _quat(_yaw(yaw)))
+    schedule, occluder_geoms = None, ()
+    if cfg.occluder:  # drawn last: the layout above does not depend on it
+        data = mujoco.MjData(bare)
+        mujoco.mj_forward(bare, data)
+        eye = T_world_camera_opencv(bare, data, CAMERA_NAME)[:3, 3]
+        targets = [spots[n][:2] for n in cfg.workpieces]
+        schedule = ReachSchedule.sample(rng, cfg.table_size, cfg.table_height, targets=targets, eye=eye)
+        occluder_geoms = _add_occluder(spec, schedule)
 
     # Settle the dropped parts with the arm holding home, then make their rest the initial state.
     model = spec.compile()
@@ -379,4 +433,5 @@ def build_world(config: WorldConfig = WorldConfig(), rng: np.random.Generator | 
         T_world_fixtures=MappingProxyType({n: frozen(T) for n, T in fixtures.items()}),
         T_world_camera=frozen(T_world_camera_opencv(model, data, CAMERA_NAME)),
         camera_name=CAMERA_NAME, table_top=cfg.table_height, T_world_arm_base=frozen(_pose(base, np.eye(3))),
+        occluder=schedule, occluder_geoms=occluder_geoms,
     )
