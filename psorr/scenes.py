@@ -20,6 +20,7 @@ from psorr.synthetic import TABLE_EXTENTS, render_meshes
 from psorr.types import PointCloud
 
 TABLE_LABEL = 0
+OCCLUDER_LABEL = 1000
 
 
 @dataclass(frozen=True, eq=False)
@@ -54,13 +55,24 @@ def _place(rng, footprints, n_tries: int = 200):
     return placed
 
 
+def _occluding_capsule(rng) -> trimesh.Trimesh:
+    """An arm-sized capsule (radius 3.5 cm, 0.7 m long) 15-25 cm above the
+    table, crossing the parts' patch at a random heading, as a person's arm would."""
+    capsule = trimesh.creation.capsule(height=0.7, radius=0.035)
+    capsule.apply_transform(trimesh.transformations.rotation_matrix(np.pi / 2, (0, 1, 0)))
+    T = trimesh.transformations.rotation_matrix(rng.uniform(0, np.pi), (0, 0, 1))
+    T[:3, 3] = (rng.uniform(-0.1, 0.1), rng.uniform(0.05, 0.2), rng.uniform(0.15, 0.25))
+    return capsule.apply_transform(T)
+
+
 def workpiece_scene(rng: np.random.Generator, meshes: dict[str, trimesh.Trimesh], names: list[str],
                     noise: KinectNoise | None = KINECT_V1,
-                    intrinsics: CameraIntrinsics | None = None) -> WorkpieceScene:
+                    intrinsics: CameraIntrinsics | None = None, occluder: bool = False) -> WorkpieceScene:
     """Render the named workpieces (keys of `meshes`, model frame, metres) on a table.
 
     rng draws the layout, then the camera (0.65-0.8 m above the table,
-    20-30 deg from the vertical), then the sensor noise.
+    20-30 deg from the vertical), then the occluder if asked for (its pixels
+    are labelled OCCLUDER_LABEL), then the sensor noise.
     """
     unknown = sorted(set(names) - set(meshes))
     if unknown:
@@ -78,6 +90,8 @@ def workpiece_scene(rng: np.random.Generator, meshes: dict[str, trimesh.Trimesh]
     height, tilt = rng.uniform(0.65, 0.8), np.radians(rng.uniform(20.0, 30.0))
     target = np.array([0.0, 0.12, 0.0])
     T_world_camera = look_at(target + (0.0, -height * np.tan(tilt), height), target)
+    if occluder:
+        world_meshes.append((_occluding_capsule(rng), OCCLUDER_LABEL))
     depth, ids = render_meshes(world_meshes, T_world_camera, intrinsics)
     if noise is not None:
         depth, source = kinect_noise_with_source(depth, intrinsics, rng, noise)

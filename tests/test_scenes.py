@@ -38,3 +38,15 @@ def test_same_seed_same_cloud(meshes):
 def test_unknown_part_names_the_choices(meshes):
     with pytest.raises(InvalidInputError, match="choose from"):
         workpiece_scene(np.random.default_rng(0), meshes, ["gearbox"])
+
+
+def test_occluding_capsule_hides_parts_and_keeps_the_layout(meshes):
+    from psorr.scenes import OCCLUDER_LABEL
+
+    bare = workpiece_scene(np.random.default_rng(1), meshes, PARTS, noise=None)
+    hidden = workpiece_scene(np.random.default_rng(1), meshes, PARTS, noise=None, occluder=True)
+    assert (hidden.cloud.labels == OCCLUDER_LABEL).sum() > 5000
+    for k in range(1, len(PARTS) + 1):
+        assert (hidden.cloud.labels == k).sum() <= (bare.cloud.labels == k).sum()
+    for a, b in zip(bare.instances, hidden.instances):
+        assert np.array_equal(a.T_camera_model, b.T_camera_model)  # the layout is drawn first
