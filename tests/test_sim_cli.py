@@ -22,3 +22,24 @@ def test_unknown_part_is_a_clear_error():
     out = subprocess.run([sys.executable, "-m", "sim.cli", "perceive", "--parts", "gearbox"],
                          capture_output=True, text=True, timeout=120)
     assert out.returncode == 2 and "gearbox" in out.stderr and "Traceback" not in out.stderr
+
+
+def test_run_prints_the_summary_contract(tmp_path):
+    out = subprocess.run([sys.executable, "-m", "sim.cli", "run", "tasks/demo.yaml", "--episodes", "1",
+                          "--poses", "oracle", "--json"], capture_output=True, text=True, timeout=600)
+    assert out.returncode == 0, out.stderr
+    record = json.loads(out.stdout.strip().splitlines()[-1])
+    assert set(record) == {"episodes", "picks", "grasp_success_rate", "place_success_rate",
+                           "pose_error_mm_median", "rot_error_deg_median", "wall_s_per_episode"}
+    assert record["episodes"] == 1 and record["picks"] == 4
+    assert record["grasp_success_rate"] == 1.0 and record["place_success_rate"] == 1.0
+
+
+def test_bad_task_files_name_the_file_and_the_fix(tmp_path):
+    cases = {"bad.yaml": "workpieces: [gearbox]\n", "keys.yaml": "workpieces: [chassis]\nspeed: 3\n",
+             "broken.yaml": "workpieces: [chassis\n"}
+    for name, text in cases.items():
+        (tmp_path / name).write_text(text)
+        out = subprocess.run([sys.executable, "-m", "sim.cli", "run", str(tmp_path / name)],
+                             capture_output=True, text=True, timeout=120)
+        assert out.returncode == 2 and name in out.stderr and "Traceback" not in out.stderr, out.stderr

@@ -1,0 +1,49 @@
+"""Task files for `psorr-sim run`: which workpieces go on the table, and the camera."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from psorr.errors import CloudFileError
+from sim.world import WorldConfig
+
+TASK_KEYS = ("workpieces", "camera_height", "camera_tilt_deg")
+
+
+@dataclass(frozen=True)
+class Task:
+    """A parsed task: its file and the world it asks for."""
+
+    path: Path
+    world: WorldConfig
+
+
+def load_task(path) -> Task:
+    """Read a YAML task; bad files and unknown keys or parts raise an error naming the file and the fix."""
+    import yaml
+
+    from psorr.workpieces import load_catalog
+
+    path = Path(path)
+    if not path.is_file():
+        raise CloudFileError(path, "no such task file", "see tasks/demo.yaml for the format")
+    try:
+        spec = yaml.safe_load(path.read_text())
+    except yaml.YAMLError as exc:
+        raise CloudFileError(path, f"not valid YAML ({exc.__class__.__name__})", "fix the syntax") from None
+    if not isinstance(spec, dict):
+        raise CloudFileError(path, "a task must be a mapping", f"give the keys {', '.join(TASK_KEYS)}")
+    unknown = sorted(set(spec) - set(TASK_KEYS))
+    if unknown:
+        raise CloudFileError(path, f"unknown keys {unknown}", f"valid keys are {', '.join(TASK_KEYS)}")
+    parts = spec.get("workpieces")
+    catalog = load_catalog()
+    if not isinstance(parts, list) or not parts or not all(isinstance(p, str) for p in parts):
+        raise CloudFileError(path, "workpieces must be a non-empty list of part names",
+                             f"choose from {', '.join(sorted(catalog))}")
+    missing = sorted(set(parts) - set(catalog))
+    if missing:
+        raise CloudFileError(path, f"unknown workpieces {missing}", f"choose from {', '.join(sorted(catalog))}")
+    options = {key: float(spec[key]) for key in ("camera_height", "camera_tilt_deg") if key in spec}
+    return Task(path, WorldConfig(workpieces=tuple(parts), **options))
