@@ -344,6 +344,17 @@ def _plan(cell: _Cell, part: str, T_est: np.ndarray) -> tuple[_Plan | None, str]
 
 # ---------------------------------------------------------------------------------------------- execution
 
+def _upright_equivalent(T_est: np.ndarray, info) -> np.ndarray:
+    """The estimate re-expressed by the part's symmetry whose +z points most nearly up.
+
+    A recogniser may return any of a symmetric part's equivalent poses (a
+    transformer flipped 180 deg about its centre is the same transformer);
+    planning needs the one that stands on its resting face.
+    """
+    candidates = [T_est @ S for S in info.symmetries]
+    return max(candidates, key=lambda T: (round(float(T[2, 2]), 6), -float(T[2, 3])))
+
+
 def pick_and_place(world: World, part: str, T_world_part_estimate: np.ndarray,
                    rng: np.random.Generator | None = None) -> PickResult:
     """Pick ``part`` using the pose estimate and seat it in its fixture; checks read the simulator.
@@ -357,7 +368,7 @@ def pick_and_place(world: World, part: str, T_world_part_estimate: np.ndarray,
         raise InvalidInputError(f"{part} has no fixture: build the world with fixtures=True")
     cell = _Cell(world)
     info = world.catalog[part]
-    T_est = np.asarray(T_world_part_estimate, float)
+    T_est = _upright_equivalent(np.asarray(T_world_part_estimate, float), info)
     body = world.model.body(part).id
     mujoco.mj_forward(world.model, world.data)
     T_start = world.body_pose(part)

@@ -125,3 +125,15 @@ def test_pick_and_place_rejects_an_unknown_part():
     world = world_for()
     with pytest.raises(InvalidInputError, match="unknown part"):
         episode.pick_and_place(world, "bushing", np.eye(4), np.random.default_rng(0))
+
+
+def test_a_flipped_but_symmetric_estimate_is_planned_upright():
+    from psorr.workpieces import load_catalog
+    from sim.episode import _upright_equivalent
+
+    info = load_catalog()["transformer"]
+    flip = next(S for S in info.symmetries if S[2, 2] < -0.5)  # 180 deg about a horizontal axis
+    T_true = np.eye(4)
+    T_true[:3, 3] = (0.3, 0.1, 0.75)
+    upright = _upright_equivalent(T_true @ flip, info)
+    assert np.allclose(upright, T_true, atol=1e-9)
