@@ -124,13 +124,18 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+def run_parsed(parser: argparse.ArgumentParser, argv: list[str] | None) -> int:
+    """Run the chosen subcommand; a PsorrError becomes one line on stderr and exit status 2."""
+    args = parser.parse_args(argv)
     try:
         return args.run(args)
     except PsorrError as exc:
-        print(f"psorr {args.command}: error: {exc}", file=sys.stderr)
+        print(f"{parser.prog} {args.command}: error: {exc}", file=sys.stderr)
         return 2
+
+
+def main(argv: list[str] | None = None) -> int:
+    return run_parsed(build_parser(), argv)
 
 
 if __name__ == "__main__":

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from psorr.errors import InvalidInputError, PsorrError
+from psorr.errors import CloudFileError, InvalidInputError
 
 DEFAULT_CATALOG = Path(__file__).resolve().parents[1] / "assets" / "workpieces" / "catalog.json"
 CONTINUOUS_STEP_DEG = 2.0  # sampling of rotations about a continuous symmetry axis in symmetric_add
@@ -24,15 +24,8 @@ _UNIT_TOL = 1e-6
 _REBUILD = "rebuild it with: python assets/workpieces/build_workpieces.py"
 
 
-class CatalogError(PsorrError):
+class CatalogError(CloudFileError):
     """The workpiece catalog is missing or malformed; the message names the file, the problem and the fix."""
-
-    def __init__(self, path, problem: str, fix: str = ""):
-        self.path = str(path)
-        message = f"{self.path}: {problem}"
-        if fix:
-            message += f" ({fix})"
-        super().__init__(message)
 
 
 def _vector(value, name: str, shape: tuple[int, ...], unit: bool = False) -> np.ndarray:

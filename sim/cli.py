@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from psorr.errors import PsorrError
+from psorr.cli import run_parsed
 
 
 def _log(message: str) -> None:
@@ -158,12 +158,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
-    try:
-        return args.run(args)
-    except PsorrError as exc:
-        print(f"psorr-sim {args.command}: error: {exc}", file=sys.stderr)
-        return 2
+    return run_parsed(build_parser(), argv)
 
 
 if __name__ == "__main__":
