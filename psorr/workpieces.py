@@ -201,6 +201,16 @@ def _axis_rotations(axis: np.ndarray, step_deg: float) -> np.ndarray:
     return out
 
 
+def symmetry_transforms(info: WorkpieceInfo) -> np.ndarray:
+    """(K, 4, 4) model-frame transforms that map the part onto itself: its discrete
+    symmetries, each composed with rotations about its continuous axis (if it has one)
+    every CONTINUOUS_STEP_DEG degrees."""
+    if info.continuous_axis is None:
+        return np.asarray(info.symmetries)
+    spins = _axis_rotations(info.continuous_axis, CONTINUOUS_STEP_DEG)
+    return np.einsum("kij,mjl->kmil", info.symmetries, spins).reshape(-1, 4, 4)
+
+
 def symmetric_add(points_model, T_est, T_true, info: WorkpieceInfo) -> float:
     """Symmetry-aware ADD: metres, the mean distance between (N, 3) model points under the
     estimated and the true pose (4x4, model -> world), minimised over the part's symmetries.
@@ -213,10 +223,7 @@ def symmetric_add(points_model, T_est, T_true, info: WorkpieceInfo) -> float:
         raise InvalidInputError(f"points_model must be a finite (N, 3) array with N > 0, got shape {points.shape}")
     T_est = _rigid(T_est, "T_est")
     T_true = _rigid(T_true, "T_true")
-    candidates = info.symmetries
-    if info.continuous_axis is not None:
-        spins = _axis_rotations(info.continuous_axis, CONTINUOUS_STEP_DEG)
-        candidates = np.einsum("kij,mjl->kmil", info.symmetries, spins).reshape(-1, 4, 4)
+    candidates = symmetry_transforms(info)
     est = points @ T_est[:3, :3].T + T_est[:3, 3]
     world = T_true @ candidates  # (K, 4, 4): the true pose composed with each symmetry
     true = np.einsum("nj,kij->kni", points, world[:, :3, :3]) + world[:, None, :3, 3]

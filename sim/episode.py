@@ -23,6 +23,7 @@ import mujoco
 import numpy as np
 
 from psorr.errors import InvalidInputError
+from psorr.workpieces import symmetry_transforms
 from sim.ik import ArmIK, T_world_site, UnreachableTargetError
 from sim.world import World
 
@@ -77,21 +78,6 @@ class EpisodeResult:
 
 # ---------------------------------------------------------------------------------------------- helpers
 
-def _symmetry_candidates(info) -> np.ndarray:
-    """The part's discrete symmetries, plus rotations about its continuous axis every 2 deg."""
-    cands = np.asarray(info.symmetries)
-    if info.continuous_axis is not None:
-        a = np.asarray(info.continuous_axis, float)
-        k = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
-        spins = []
-        for ang in np.deg2rad(np.arange(0.0, 360.0, 2.0)):
-            S = np.eye(4)
-            S[:3, :3] = np.eye(3) + math.sin(ang) * k + (1 - math.cos(ang)) * (k @ k)
-            spins.append(S)
-        cands = np.einsum("kij,mjl->kmil", cands, np.array(spins)).reshape(-1, 4, 4)
-    return cands
-
-
 def _angle_deg(R: np.ndarray) -> float:
     return float(np.degrees(np.arccos(np.clip((np.trace(R) - 1.0) / 2.0, -1.0, 1.0))))
 
@@ -99,7 +85,7 @@ def _angle_deg(R: np.ndarray) -> float:
 def pose_error(T_est: np.ndarray, T_true: np.ndarray, info) -> tuple[float, float]:
     """(mm, deg): position and rotation error of ``T_est`` against ``T_true``, least over the symmetries."""
     best = (math.inf, math.inf)
-    for S in _symmetry_candidates(info):
+    for S in symmetry_transforms(info):
         T = T_true @ S
         e = (float(np.linalg.norm(T_est[:3, 3] - T[:3, 3])) * 1e3, _angle_deg(T_est[:3, :3].T @ T[:3, :3]))
         if e[0] + e[1] < best[0] + best[1]:
@@ -110,7 +96,7 @@ def pose_error(T_est: np.ndarray, T_true: np.ndarray, info) -> tuple[float, floa
 def fixture_error(T_true: np.ndarray, T_fixture: np.ndarray, info) -> tuple[float, float, float]:
     """(xy mm, yaw deg, tilt deg) of a part's true pose against its fixture pose, least over symmetries."""
     best = (math.inf, math.inf, math.inf)
-    for S in _symmetry_candidates(info):
+    for S in symmetry_transforms(info):
         T = T_fixture @ S
         R = T[:3, :3].T @ T_true[:3, :3]
         yaw = abs(math.degrees(math.atan2(R[1, 0], R[0, 0])))
