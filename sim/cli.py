@@ -26,16 +26,6 @@ def _log(message: str) -> None:
     print(message, file=sys.stderr, flush=True)
 
 
-def _rotation_error_deg(R_est: np.ndarray, R_true: np.ndarray, symmetries: np.ndarray) -> float:
-    """Smallest angle between the estimate and the truth under the part's discrete symmetries."""
-    best = np.inf
-    for S in symmetries:
-        R = R_true @ S[:3, :3]
-        cos = (np.trace(R_est.T @ R) - 1.0) / 2.0
-        best = min(best, float(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))))
-    return best
-
-
 def _perceive(args) -> int:
     import matplotlib
 
@@ -47,6 +37,7 @@ def _perceive(args) -> int:
     from psorr.recognize import Recognizer
     from psorr.render import save_detections_png
     from psorr.workpieces import symmetric_add
+    from sim.episode import pose_error
     from sim.sensor import DepthCamera
     from sim.world import WorldConfig, build_world
 
@@ -64,8 +55,7 @@ def _perceive(args) -> int:
         info, model = world.catalog[det.model], library.model(det.model)
         T_true = T_camera_world @ world.body_pose(det.model) if det.model in world.workpieces else None
         add = symmetric_add(model.points[::10], det.T_cloud_model, T_true, info) if T_true is not None else np.inf
-        rot = _rotation_error_deg(det.T_cloud_model[:3, :3], T_true[:3, :3], info.symmetries) \
-            if T_true is not None else np.inf
+        rot = pose_error(det.T_cloud_model, T_true, info)[1] if T_true is not None else np.inf
         ok = add < 0.1 * model.diameter
         found |= {det.model} if ok else set()
         rows.append({"model": det.model, "score": det.score, "add_mm": add * 1e3, "rot_deg": rot, "correct": ok})
