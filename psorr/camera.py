@@ -118,6 +118,19 @@ def _per_pixel(value, name: str, intrinsics: CameraIntrinsics, tail: tuple[int, 
     )
 
 
+def checked_depth(depth, intrinsics: CameraIntrinsics) -> tuple[np.ndarray, np.ndarray]:
+    """(depth (H, W) float64 with 0 where there is no return, valid (H, W) bool) of a depth
+    image, whose shape must match the intrinsics; 0, negative and NaN depths are no return."""
+    depth = np.asarray(depth, dtype=np.float64)
+    if depth.shape != intrinsics.shape:
+        raise InvalidInputError(
+            f"depth must have shape (H, W) = {intrinsics.shape} to match the intrinsics, "
+            f"got {depth.shape}"
+        )
+    valid = np.isfinite(depth) & (depth > 0)
+    return np.where(valid, depth, 0.0), valid
+
+
 def depth_to_cloud(depth, intrinsics: CameraIntrinsics, colors=None, labels=None) -> PointCloud:
     """Back-project a depth image into an organised cloud in the camera frame.
 
@@ -132,13 +145,7 @@ def depth_to_cloud(depth, intrinsics: CameraIntrinsics, colors=None, labels=None
         An organised PointCloud of H*W points in row-major pixel order (index v * W + u),
         with NaN rows where there is no return.
     """
-    depth = np.asarray(depth, dtype=np.float64)
-    if depth.shape != intrinsics.shape:
-        raise InvalidInputError(
-            f"depth must have shape (H, W) = {intrinsics.shape} to match the intrinsics, "
-            f"got {depth.shape}"
-        )
-    valid = np.isfinite(depth) & (depth > 0)
+    depth, valid = checked_depth(depth, intrinsics)
     points = intrinsics.pixel_rays() * np.where(valid, depth, np.nan)[..., None]
     points = points.reshape(-1, 3)
     if colors is not None:

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from psorr.camera import CameraIntrinsics
+from psorr.camera import CameraIntrinsics, checked_depth
 from psorr.errors import InvalidInputError
 
 
@@ -81,6 +81,11 @@ class KinectNoise:
         z = np.asarray(z, dtype=np.float64)
         return self.sigma_base + self.sigma_quad * (z - self.sigma_z0) ** 2
 
+    def depth_sigma(self, z, fx: float = 525.0) -> np.ndarray:
+        """Total depth standard deviation (metres) at depth z: axial noise and disparity
+        quantisation (uniform over a step, so step^2 / 12) added in quadrature."""
+        return np.sqrt(self.axial_sigma(z) ** 2 + self.quantisation_step(z, fx) ** 2 / 12.0)
+
     def quantisation_step(self, z, fx: float = 525.0) -> np.ndarray:
         """Depth step (metres) between neighbouring disparity levels at depth z."""
         z = np.asarray(z, dtype=np.float64)
@@ -91,17 +96,6 @@ KINECT_V1 = KinectNoise()
 """The default Kinect v1 noise model."""
 
 
-def _check_depth(depth, intrinsics: CameraIntrinsics) -> tuple[np.ndarray, np.ndarray]:
-    depth = np.asarray(depth, dtype=np.float64)
-    if depth.shape != intrinsics.shape:
-        raise InvalidInputError(
-            f"depth must have shape (H, W) = {intrinsics.shape} to match the intrinsics, "
-            f"got {depth.shape}"
-        )
-    valid = np.isfinite(depth) & (depth > 0)
-    return np.where(valid, depth, 0.0), valid
-
-
 def grazing_angles(depth, intrinsics: CameraIntrinsics) -> np.ndarray:
     """(H, W) angle in degrees between each pixel's view ray and the surface normal.
 
@@ -109,7 +103,7 @@ def grazing_angles(depth, intrinsics: CameraIntrinsics) -> np.ndarray:
     the smaller depth change is used, so normals do not smear across depth edges. NaN where
     a pixel or both neighbours along an axis have no return.
     """
-    depth, valid = _check_depth(depth, intrinsics)
+    depth, valid = checked_depth(depth, intrinsics)
     points = intrinsics.pixel_rays() * np.where(valid, depth, np.nan)[..., None]
     tangents = []
     for axis in (1, 0):
@@ -158,7 +152,7 @@ def shadow_mask(depth, intrinsics: CameraIntrinsics, baseline: float = 0.075) ->
     a pixel further towards the projector maps to the same or a smaller projector column,
     i.e. something nearer blocks the projector's ray.
     """
-    depth, valid = _check_depth(depth, intrinsics)
+    depth, valid = checked_depth(depth, intrinsics)
     if baseline < 0:
         return shadow_mask(depth[:, ::-1], intrinsics, -baseline)[:, ::-1]
     columns = np.arange(intrinsics.width, dtype=np.float64)[None, :]
@@ -186,7 +180,7 @@ def kinect_noise_with_source(
         (H, W) int64 flat index (v * W + u) of the clean pixel each output pixel samples,
         so per-pixel labels can follow the lateral jitter (labels.ravel()[source]).
     """
-    depth, valid = _check_depth(depth, intrinsics)
+    depth, valid = checked_depth(depth, intrinsics)
     h, w = depth.shape
     drop_prob = np.zeros((h, w))
     dropped = ~valid

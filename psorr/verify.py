@@ -56,7 +56,7 @@ class PoseCheck:
 
 
 def depth_tolerance(z: np.ndarray, params: CheckParams) -> np.ndarray:
-    sigma = np.sqrt(KINECT_V1.axial_sigma(z) ** 2 + KINECT_V1.quantisation_step(z) ** 2 / 12.0)
+    sigma = KINECT_V1.depth_sigma(z)
     return np.maximum(params.min_tolerance, params.sigmas * sigma)
 
 

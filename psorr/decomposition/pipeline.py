@@ -106,8 +106,7 @@ def inlier_threshold(points: np.ndarray, params: DecomposeParams) -> np.ndarray:
     if not params.sensor_noise:
         return np.full(len(points), params.min_inlier_distance)
     z = points[:, 2]
-    # Axial noise and disparity quantisation (uniform, so step^2 / 12) add in quadrature.
-    sigma = np.sqrt(KINECT_V1.axial_sigma(z) ** 2 + KINECT_V1.quantisation_step(z) ** 2 / 12.0)
+    sigma = KINECT_V1.depth_sigma(z)
     return np.maximum(params.min_inlier_distance, params.inlier_sigmas * sigma)
 
 
