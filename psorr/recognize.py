@@ -93,13 +93,12 @@ def _scene_oriented_points(primitives, max_extent):
     return np.array(pts).reshape(-1, 3), np.array(nrm).reshape(-1, 3), used
 
 
-def _cluster(poses, models, library, cell, limit):
+def _cluster(poses, models, centres, library, cell, limit):
     """Vote poses into (model, position cell, coarse rotation) bins. Each model
     gets an equal share of the `limit` hypotheses, its fullest bins first (one
     pose each): a model with many primitives collects more chance votes, and a
     single shared ranking would crowd the others out."""
-    centres = np.array([m.points.mean(axis=0) for m in library.models])[models]
-    where = np.einsum("kij,kj->ki", poses[:, :3, :3], centres) + poses[:, :3, 3]
+    where = np.einsum("kij,kj->ki", poses[:, :3, :3], centres[models]) + poses[:, :3, 3]
     quat = Rotation.from_matrix(poses[:, :3, :3]).as_quat()
     quat *= np.where(quat[:, 3:] < 0, -1, 1)
     keys = np.column_stack([models, np.floor(where / cell), np.round(quat * 4)]).astype(np.int64)
@@ -177,6 +176,7 @@ class Recognizer:
             raise InvalidInputError(f"unknown method {method!r}; choose one of {METHODS}")
         self.library, self.method, self.params = library, method, params or RecognizeParams()
         self.max_diameter = max(m.diameter for m in library.models)
+        self.model_centres = np.array([m.points.mean(axis=0) for m in library.models])  # (M, 3), model frames
 
     def recognize(self, cloud: PointCloud, rng: np.random.Generator | None = None) -> Recognition:
         if not isinstance(cloud, PointCloud):
@@ -210,7 +210,7 @@ class Recognizer:
         if len(rows) == 0:
             return [], 0, 0.0, decomposition_ms
         poses, models = self.library.table.poses(scene_index, rows, pts[i], nrm[i], pts[j])
-        poses, models = _cluster(poses, models, self.library, p.cluster_cell, p.max_hypotheses)
+        poses, models = _cluster(poses, models, self.model_centres, self.library, p.cluster_cell, p.max_hypotheses)
         scene_prims = [scene.primitives[k] for k in used]
         t1 = time.perf_counter()
         scores = np.array([_box_score(self.library.models[m], T, scene_prims, p.box_thickness)
