@@ -9,6 +9,8 @@ metres and kilograms; transforms are 4x4 arrays in the part's model frame
 
 from __future__ import annotations
 
+import functools
+
 import json
 import math
 from dataclasses import dataclass
@@ -133,12 +135,25 @@ class WorkpieceInfo:
 
         return read_mesh(self.mesh_path)
 
+    def bounds(self) -> np.ndarray:
+        """(2, 3) read-only model-frame bounds of the mesh (lo, hi), metres; read once per path."""
+        return _mesh_bounds(self.mesh_path)
+
     def grasp(self, name: str) -> Grasp:
         """The grasp called `name`; InvalidInputError naming the valid ones otherwise."""
         for g in self.grasps:
             if g.name == name:
                 return g
         raise InvalidInputError(f"{self.name} has no grasp {name!r}; choose one of {[g.name for g in self.grasps]}")
+
+
+@functools.lru_cache(maxsize=64)
+def _mesh_bounds(path: Path) -> np.ndarray:
+    from psorr.io import read_mesh
+
+    bounds = np.asarray(read_mesh(path).bounds, dtype=float)
+    bounds.setflags(write=False)
+    return bounds
 
 
 def _parse_part(path: Path, name: str, entry) -> WorkpieceInfo:

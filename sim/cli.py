@@ -7,7 +7,9 @@ a pick-and-place episode.
 
 `run TASK.yaml` runs seeded pick-and-place episodes: each part is picked
 with a catalog grasp and placed in its fixture, from the recognised poses or
-the true ones (oracle), and judged on the simulator's truth.
+the true ones (oracle), and judged on the simulator's truth. With the
+occluder on, a person reaches over the table now and then; the robot sees
+them in its camera, waits before looking again and stops while they reach.
 """
 
 from __future__ import annotations
@@ -80,8 +82,6 @@ def _perceive(args) -> int:
 
 
 def _run(args) -> int:
-    import time
-
     from tqdm import tqdm
 
     from sim.episode import run_episode
@@ -89,41 +89,57 @@ def _run(args) -> int:
     from sim.world import build_world
 
     task = load_task(args.task)
-    picks, walls = [], []
-    rows = []
-    for episode in tqdm(range(args.episodes), desc=f"episodes ({args.poses})", file=sys.stderr):
+    occluder = args.occluder == "on"
+    results, rows = [], []
+    for episode in tqdm(range(args.episodes), desc=f"episodes ({args.poses}, occluder {args.occluder})",
+                        file=sys.stderr):
         rng = np.random.default_rng([args.seed, episode])
-        start = time.perf_counter()
         world = build_world(task.world, rng)
-        result = run_episode(world, rng, poses=args.poses)
-        walls.append(time.perf_counter() - start)
-        picks += list(result.picks)
-        for p in result.picks:
-            rows.append((episode, p))
-    grasped = [p.grasped for p in picks]
-    placed = [p.placed for p in picks]
-    recognised = [p for p in picks if np.isfinite(p.pose_error_mm)]
-    summary = {
-        "episodes": args.episodes,
-        "picks": len(picks),
-        "grasp_success_rate": float(np.mean(grasped)) if picks else 0.0,
-        "place_success_rate": float(np.mean(placed)) if picks else 0.0,
-        "pose_error_mm_median": float(np.median([p.pose_error_mm for p in recognised])) if recognised else None,
-        "rot_error_deg_median": float(np.median([p.rot_error_deg for p in recognised])) if recognised else None,
-        "wall_s_per_episode": float(np.mean(walls)),
-    }
+        recorder = None
+        if args.record:
+            from sim.record import EpisodeRecorder
+
+            recorder = EpisodeRecorder(Path(args.record), f"episode_{args.seed}_{episode}")
+        result = run_episode(world, rng, poses=args.poses, occluder=occluder, recorder=recorder)
+        if recorder is not None:
+            for path in recorder.close():
+                _log(f"wrote {path}")
+        results.append(result)
+        rows += [(episode, p) for p in result.picks]
+    summary = summarize(results, args.episodes)
     if args.json:
         print(json.dumps(summary))
         return 0
     print(f"{'ep':>3} {'part':<15} {'grasp':<14} {'grasped':>7} {'lift m':>6} {'placed':>6} "
-          f"{'pose err mm':>11} {'rot err deg':>11}  note")
+          f"{'pose err mm':>11} {'rot err deg':>11} {'looks':>5}  note")
     for episode, p in rows:
         print(f"{episode:>3} {p.part:<15} {p.grasp_name or '-':<14} {str(p.grasped):>7} {p.lifted_m:>6.3f} "
-              f"{str(p.placed):>6} {p.pose_error_mm:>11.1f} {p.rot_error_deg:>11.1f}  {p.note}")
-    print(f"\n{summary['picks']} picks in {args.episodes} episodes ({args.poses} poses): grasp success "
-          f"{summary['grasp_success_rate']:.0%}, place success {summary['place_success_rate']:.0%}, "
+              f"{str(p.placed):>6} {p.pose_error_mm:>11.1f} {p.rot_error_deg:>11.1f} {p.looks:>5}  {p.note}")
+    print(f"\n{summary['picks']} picks in {args.episodes} episodes ({args.poses} poses, occluder {args.occluder}): "
+          f"grasp success {summary['grasp_success_rate']:.0%}, place success {summary['place_success_rate']:.0%}, "
           f"{summary['wall_s_per_episode']:.1f} s per episode")
+    if occluder:
+        stops = sum(r.protective_stops for r in results)
+        waits = sum(r.occupied_looks for r in results)
+        clearance = min(r.min_human_clearance_mm for r in results)
+        print(f"the person reached in: {waits} looks waited, {stops} protective stops "
+              f"({sum(r.stopped_s for r in results):.1f} s held); closest the arm came to them: {clearance:.0f} mm")
     return 0
+
+
+def summarize(results, episodes: int) -> dict:
+    """The `run --json` summary of :class:`sim.episode.EpisodeResult` s (rates over all picks)."""
+    picks = [p for r in results for p in r.picks]
+    recognised = [p for p in picks if np.isfinite(p.pose_error_mm)]
+    return {
+        "episodes": episodes,
+        "picks": len(picks),
+        "grasp_success_rate": float(np.mean([p.grasped for p in picks])) if picks else 0.0,
+        "place_success_rate": float(np.mean([p.placed for p in picks])) if picks else 0.0,
+        "pose_error_mm_median": float(np.median([p.pose_error_mm for p in recognised])) if recognised else None,
+        "rot_error_deg_median": float(np.median([p.rot_error_deg for p in recognised])) if recognised else None,
+        "wall_s_per_episode": float(np.mean([r.wall_s for r in results])) if results else 0.0,
+    }
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -142,6 +158,10 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--seed", type=int, default=0)
     run.add_argument("--poses", choices=("recognized", "oracle"), default="recognized",
                      help="grasp from the recognizer's poses (default) or the true ones")
+    run.add_argument("--occluder", choices=("on", "off"), default="on",
+                     help="a person reaches over the table now and then (default on); the robot waits for them")
+    run.add_argument("--record", metavar="DIR",
+                     help="write each episode's MP4 and a PNG contact sheet (views, recognised poses, grasps) here")
     run.add_argument("--json", action="store_true", help="print one JSON line of summary figures")
     run.set_defaults(run=_run)
     return parser

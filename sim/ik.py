@@ -136,6 +136,7 @@ class ArmIK:
         T_world_tool_target: np.ndarray,
         collision_geoms: CollisionPairs | None = None,
         max_iters: int = 300,
+        obstacles: mujoco.MjData | None = None,
         tol_pos: float = 1e-3,
         tol_rot: float = float(np.deg2rad(0.5)),
         raise_on_failure: bool = True,
@@ -149,6 +150,8 @@ class ArmIK:
                 apart along the way, or None. Pairs must start apart; the limit only stops them
                 approaching.
             max_iters: Most QP steps before giving up.
+            obstacles: Data whose mocap bodies (e.g. the moving human) are posed where they are
+                now; the collision pairs see them there. None keeps the model's mocap poses.
             tol_pos: Position tolerance (m).
             tol_rot: Orientation tolerance (rad).
             raise_on_failure: Raise when not converged; otherwise return the closest attempt
@@ -170,6 +173,9 @@ class ArmIK:
             raise InvalidInputError("T_world_tool_target's rotation is not orthonormal and right-handed")
 
         configuration = self._configuration
+        if obstacles is not None and self.model.nmocap:
+            configuration.data.mocap_pos[:] = obstacles.mocap_pos
+            configuration.data.mocap_quat[:] = obstacles.mocap_quat
         configuration.update(q_start.copy())
         self.frame_task.set_target(mink.SE3.from_matrix(T_target))
         posture = q_start.copy()

@@ -160,8 +160,9 @@ class World:
         return _pose(data.xpos[body_id], data.xmat[body_id].reshape(3, 3))
 
     def apply_occluder(self, data: mujoco.MjData | None = None, t: float = 0.0,
-                       schedule: ReachSchedule | None = None) -> mujoco.MjData:
-        """Pose the occluder for time ``t`` (s) of ``schedule`` (default: ``self.occluder``) in ``data``.
+                       schedule: ReachSchedule | None = None, poses: dict | None = None) -> mujoco.MjData:
+        """Pose the occluder for time ``t`` (s) of ``schedule`` (default: ``self.occluder``) in ``data``,
+        or at ``poses`` (``{geom name: T_world_body}`` as :func:`sim.occluder.occluder_pose` gives) when given.
 
         Sets ``data.mocap_pos`` / ``mocap_quat`` (default ``self.data``); call ``mj_forward`` (or step)
         before reading poses or rendering. Returns ``data``. InvalidInputError without an occluder.
@@ -170,7 +171,8 @@ class World:
         schedule = self.occluder if schedule is None else schedule
         if not self.occluder_geoms or schedule is None:
             raise InvalidInputError("this world has no occluder: build it with WorldConfig(occluder=True)")
-        for name, T in occluder_pose(schedule, t).items():
+        poses = occluder_pose(schedule, t) if poses is None else poses
+        for name, T in poses.items():
             mocap = self.model.body_mocapid[self.model.body(name).id]
             data.mocap_pos[mocap] = T[:3, 3]
             data.mocap_quat[mocap] = _quat(T[:3, :3])

@@ -1,0 +1,191 @@
+"""What the robot knows about the cell: the Kinect's frames, PSORR's detections, and whether someone is reaching in.
+
+The robot sees through the camera and knows its own body, nothing else. "Someone is reaching
+over the table" is decided from the depth image alone: points above the table's footprint
+higher than any resting workpiece stands (plus a margin) are something that does not belong
+there. Two things are filtered out first, both from the robot's knowledge of itself: its own
+arm (the pixels where its model, rendered at the known joint angles, lies; that is what the
+segmentation render's arm pixels are) and, while it holds one, the part in its hand (a ball
+around the tool of the part's size).
+
+The same test serves the look before a pick (the full Kinect frame) and the protective-stop
+monitor while the arm moves (a 160x120 depth render every 0.25 s; see :mod:`sim.cell`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from types import MappingProxyType
+
+import mujoco
+import numpy as np
+
+from psorr.camera import CameraIntrinsics
+from psorr.kinect_noise import KINECT_V1
+from psorr.types import Detection, PointCloud
+from sim.ik import T_world_site
+from sim.sensor import DepthCamera, SensorFrame
+from sim.world import World
+
+CEILING_MARGIN = 0.03  # m above the tallest resting part before a point counts as an intrusion
+INTRUSION_FRACTION = 0.001  # of the image's pixels: fewer intruding points than this are noise
+WORKSPACE_BELOW = 0.03  # m below the table top the workspace crop starts (the table's own points stay in)
+MONITOR_CAMERA = CameraIntrinsics(width=160, height=120, fx=131.25, fy=131.25, cx=79.5, cy=59.5)
+"""The monitor's depth stream: the Kinect's field of view at a quarter of its resolution."""
+
+
+@dataclass(frozen=True, eq=False)
+class Look:
+    """One look at the cell before a pick.
+
+    Attributes:
+        frame: the Kinect frame (None when the look was an oracle's occupancy check only).
+        detections: PSORR's detections in the camera frame (empty for the oracle).
+        estimates: per part, its detections' world poses (4, 4) and scores, best first.
+        intruding: how many points are above the workspace that neither a part nor the robot explains.
+        occupied: ``intruding`` reaches the threshold: someone is reaching in.
+    """
+
+    frame: SensorFrame | None
+    detections: tuple[Detection, ...]
+    estimates: MappingProxyType
+    intruding: int
+    occupied: bool
+
+
+class Perception:
+    """The robot's senses in ``world``: a Kinect for looks, a low-resolution depth monitor, PSORR.
+
+    Args:
+        world: the cell.
+        rng: the sensor noise's randomness (the monitor draws its own from it).
+        recognize: run PSORR on each look (False: looks only check occupancy).
+
+    Call :meth:`close` (or use it as a context manager) to free the renderers.
+    """
+
+    def __init__(self, world: World, rng: np.random.Generator, recognize: bool = True):
+        self.world, self.rng = world, rng
+        self.camera = DepthCamera(world.model, world.camera_name)
+        self._monitor = mujoco.Renderer(world.model, MONITOR_CAMERA.height, MONITOR_CAMERA.width)
+        self._recognizer = _recognizer(world) if recognize else None
+        model = world.model
+        base = model.body(world.arm.base_body).id
+        self._arm_bodies = np.array([b for b in range(model.nbody) if _descends(model, b, base)])
+        heights = [world.catalog[p].bounds()[1, 2] for p in world.workpieces]
+        self.ceiling = world.table_top + max(heights) + CEILING_MARGIN
+        self._monitor_rays = MONITOR_CAMERA.pixel_rays().reshape(-1, 3)
+        self._far = 0.99 * model.vis.map.zfar * model.stat.extent
+
+    @property
+    def library(self):
+        """The recognizer's :class:`psorr.library.ModelLibrary`, or None when not recognising."""
+        return self._recognizer.library if self._recognizer is not None else None
+
+    # -------------------------------------------------------------------------------- looking
+
+    def look(self, data: mujoco.MjData, holding: str | None = None) -> Look:
+        """Render the Kinect, count intruding points and (when nobody intrudes and recognising) run PSORR.
+
+        PSORR gets the cloud cropped to the workspace: the table's footprint from just below its
+        top up to the ceiling, less the robot's own pixels. Cropped points become NaN, so the
+        cloud stays organised.
+        """
+        frame = self.camera.render(data, self.rng, KINECT_V1)
+        pts = frame.cloud.points
+        T = frame.T_world_camera
+        world_pts = pts @ T[:3, :3].T + T[:3, 3]  # NaN rows stay NaN
+        own = np.isin(frame.segmentation.ravel(), self._arm_bodies)
+        valid = np.isfinite(pts[:, 2]) & ~own
+        intruding = self._count_intruding(world_pts[valid], data, holding)
+        occupied = intruding >= INTRUSION_FRACTION * len(pts)
+        detections, estimates = (), {}
+        if self._recognizer is not None and not occupied:
+            with np.errstate(invalid="ignore"):
+                keep = valid & self._in_workspace(world_pts) & (world_pts[:, 2] <= self.ceiling)
+            cloud = _masked(frame.cloud, keep)
+            detections = tuple(self._recognizer.recognize(cloud, self.rng).detections)
+            for det in detections:
+                if det.model in self.world.workpieces:
+                    estimates.setdefault(det.model, []).append((T @ np.asarray(det.T_cloud_model), det.score))
+        estimates = {k: tuple(sorted(v, key=lambda e: -e[1])) for k, v in estimates.items()}
+        return Look(frame, detections, MappingProxyType(estimates), intruding, bool(occupied))
+
+    def _in_workspace(self, world_pts: np.ndarray) -> np.ndarray:
+        hx, hy = (v / 2 for v in self.world.config.table_size)
+        return ((np.abs(world_pts[:, 0]) < hx) & (np.abs(world_pts[:, 1]) < hy)
+                & (world_pts[:, 2] > self.world.table_top - WORKSPACE_BELOW))
+
+    def occupied(self, data: mujoco.MjData, holding: str | None = None) -> bool:
+        """The monitor's verdict: is someone reaching over the table now? (160x120 depth, Kinect noise)."""
+        from psorr.kinect_noise import apply_kinect_noise
+
+        r = self._monitor
+        r.enable_depth_rendering()  # enabling segmentation below switched depth off
+        r.update_scene(data, camera=self.world.camera_name)
+        depth = r.render().astype(np.float64)
+        r.enable_segmentation_rendering()
+        seg = r.render()
+        r.disable_segmentation_rendering()
+        is_geom = seg[..., 1] == int(mujoco.mjtObj.mjOBJ_GEOM)
+        body = np.where(is_geom, self.world.model.geom_bodyid[np.where(is_geom, seg[..., 0], 0)], -1)
+        depth = np.where((body >= 0) & (depth < self._far) & ~np.isin(body, self._arm_bodies), depth, 0.0)
+        depth = apply_kinect_noise(depth, MONITOR_CAMERA, self.rng, KINECT_V1).ravel()
+        keep = depth > 0
+        T = _camera_pose(self.world, data)
+        pts = (self._monitor_rays[keep] * depth[keep, None]) @ T[:3, :3].T + T[:3, 3]
+        return self._count_intruding(pts, data, holding) >= INTRUSION_FRACTION * depth.size
+
+    def _count_intruding(self, world_pts: np.ndarray, data: mujoco.MjData, holding: str | None) -> int:
+        inside = self._in_workspace(world_pts) & (world_pts[:, 2] > self.ceiling)
+        if holding is not None and np.any(inside):
+            tool = T_world_site(self.world.model, data, self.world.arm.tool_site)[:3, 3]
+            radius = float(np.linalg.norm(np.ptp(self.world.catalog[holding].bounds(), axis=0))) + 0.02
+            inside &= np.linalg.norm(world_pts - tool, axis=1) > radius
+        return int(np.count_nonzero(inside))
+
+    def close(self) -> None:
+        self.camera.close()
+        self._monitor.close()
+
+    def __enter__(self) -> Perception:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def _masked(cloud: PointCloud, keep: np.ndarray) -> PointCloud:
+    """``cloud`` with the points outside ``keep`` set to NaN (and label -1), still organised."""
+    points = np.where(keep[:, None], cloud.points, np.nan)
+    labels = None if cloud.labels is None else np.where(keep, cloud.labels, -1)
+    return PointCloud(points, colors=cloud.colors, normals=None, labels=labels, width=cloud.width,
+                      height=cloud.height)
+
+
+def _descends(model: mujoco.MjModel, body: int, root: int) -> bool:
+    while body > 0:
+        if body == root:
+            return True
+        body = int(model.body_parentid[body])
+    return False
+
+
+def _camera_pose(world: World, data: mujoco.MjData) -> np.ndarray:
+    from sim.sensor import T_world_camera_opencv
+
+    return T_world_camera_opencv(world.model, data, world.camera_name)
+
+
+_RECOGNIZERS: dict[tuple, object] = {}
+
+
+def _recognizer(world: World):
+    """A PSORR recognizer for every catalog part (trained once per process; cached on disk by psorr)."""
+    from psorr.library import ModelLibrary
+    from psorr.recognize import Recognizer
+
+    paths = tuple(str(world.catalog[n].mesh_path) for n in sorted(world.catalog))
+    if paths not in _RECOGNIZERS:
+        _RECOGNIZERS[paths] = Recognizer(ModelLibrary.from_meshes(list(paths)))
+    return _RECOGNIZERS[paths]
