@@ -33,7 +33,7 @@ test: setup
 
 demo: setup
 	$(BIN)/python -m psorr.demo
-	$(BIN)/psorr-sim run tasks/demo.yaml --episodes 2 --seed 0 --occluder on --record results/demo
+	$(BIN)/psorr-sim run tasks/demo.yaml --episodes 2 --seed 0 --occluder on --record out/demo
 
 bench: setup
 	$(BIN)/python benchmarks/decompose.py
