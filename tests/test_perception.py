@@ -1,0 +1,158 @@
+"""The robot's perception in the cell (sim/perception.py), the reaching person (sim/occluder.py
+ReachingHuman) and how episodes react to them (sim/episode.py). Headless."""
+
+import math
+
+import mujoco
+import numpy as np
+import pytest
+
+import sim.episode as episode
+from sim.occluder import ReachingHuman, ReachSchedule, occlusion_at
+from sim.perception import Look, Perception
+from sim.world import WorldConfig, build_world
+
+SEED = 7
+PARTS = ("u_channel", "transformer")
+
+
+@pytest.fixture(scope="module")
+def world():
+    return build_world(WorldConfig(workpieces=PARTS), np.random.default_rng(SEED))
+
+
+@pytest.fixture(scope="module")
+def perception(world):
+    with Perception(world, np.random.default_rng(0), recognize=False) as p:
+        yield p
+
+
+def at_peak(world, data=None):
+    """``data`` with the person's hand over the table at the peak of the world's sampled reach."""
+    data = world.reset(mujoco.MjData(world.model) if data is None else data)
+    world.apply_occluder(data, world.occluder.peak_s[0])
+    mujoco.mj_forward(world.model, data)
+    return data
+
+
+def test_nobody_reaching_in_is_not_occupied_although_the_arm_hangs_over_the_table(world, perception):
+    data = world.reset(mujoco.MjData(world.model))
+    # At home the arm's links are over the table, above the ceiling: the self-filter removes them.
+    look = perception.look(data)
+    assert not look.occupied and look.intruding < 50
+    assert not perception.occupied(data)
+
+
+def test_a_person_reaching_in_is_seen_by_the_look_and_by_the_monitor(world, perception):
+    data = at_peak(world)
+    look = perception.look(data)
+    assert look.occupied and look.intruding > 1000
+    assert look.detections == () and dict(look.estimates) == {}  # nothing is recognised while someone reaches in
+    assert perception.occupied(data)
+
+
+def test_the_part_in_the_hand_is_not_an_intrusion(world, perception):
+    """A part held high by the tool is above the ceiling; it is the robot's, so it does not count."""
+    data = world.reset(mujoco.MjData(world.model))
+    from sim.ik import T_world_site
+
+    tool = T_world_site(world.model, data, world.arm.tool_site)
+    part = world.model.body("u_channel")
+    qadr = world.model.jnt_qposadr[part.jntadr[0]]
+    data.qpos[qadr:qadr + 3] = tool[:3, 3] - [0.0, 0.0, 0.05]  # hanging just under the tool
+    mujoco.mj_forward(world.model, data)
+    assert perception.look(data).intruding > 200
+    assert perception.look(data, holding="u_channel").intruding < 50
+
+
+def test_the_recognizer_sees_only_the_workspace(world):
+    """PSORR gets the cloud cropped to the table (less the arm): the person standing beyond the edge is
+    not in it, and every estimate it returns is of a task part."""
+    with Perception(world, np.random.default_rng(1)) as p:
+        data = world.reset(mujoco.MjData(world.model))
+        look = p.look(data)
+    assert not look.occupied
+    assert set(look.estimates) <= set(PARTS)
+    for estimates in look.estimates.values():
+        scores = [score for _, score in estimates]
+        assert scores == sorted(scores, reverse=True)
+
+
+# ---------------------------------------------------------------------------------------------- the person
+
+def test_the_person_does_not_reach_where_the_arm_is():
+    rng = np.random.default_rng(3)
+    human = ReachingHuman(rng, (0.9, 1.0), 0.75, targets=[(0.1, 0.0)], keep_away=0.25)
+    base, tool = np.array([-0.35, 0.0]), np.array([0.1, 0.0])  # the arm lies over the only target
+    for t in np.arange(0.0, 20.0, 0.1):
+        human.update(t, base, tool)
+    # Random table points remain possible targets, but never one within reach of the arm's footprint.
+    for reach in human.reaches:
+        assert human._clearance(reach, base, tool) >= 0.25
+
+
+def test_the_person_pulls_back_when_the_arm_comes_near_and_the_motion_is_continuous():
+    rng = np.random.default_rng(0)
+    human = ReachingHuman(rng, (0.9, 1.0), 0.75, targets=[(0.2, 0.3)], first_s=(0.0, 0.0))
+    base, far_tool = np.array([-0.35, 0.0]), np.array([-0.3, -0.4])
+    human.update(0.0, base, far_tool)
+    reach = human.reaches[-1]
+    t = reach.start_s + 0.6 * reach.reach_s
+    before = human.update(t, base, far_tool)
+    k = occlusion_at(human.current, t)
+    after = human.update(t + 1e-6, base, np.asarray(reach.hand_xy))  # the arm arrives where the hand goes
+    assert human.current.end_s < reach.end_s  # cut short
+    assert occlusion_at(human.current, t + 1e-6) == pytest.approx(k, abs=1e-3)
+    for name in before:
+        assert np.allclose(before[name][:3, 3], after[name][:3, 3], atol=2e-3)
+    assert occlusion_at(human.current, human.current.end_s + 1e-3) == 0.0
+
+
+def test_reach_schedules_are_still_checked():
+    with pytest.raises(Exception, match="reach_s"):
+        ReachSchedule(0.0, 0.0, 0.0, 1.0, (0, 0), (0, 0), 0.2, 0.0, 0.45, 0.75)
+
+
+# ---------------------------------------------------------------------------------------------- episodes
+
+def test_the_robot_waits_while_someone_reaches_in_then_picks(world, monkeypatch):
+    """The first two looks see a person: the robot waits and looks again, then picks from a later look."""
+    real_look = episode.Episode.look
+    calls = []
+
+    def look(self):
+        result = real_look(self)
+        calls.append(result)
+        if len(calls) <= 2:
+            return Look(result.frame, (), result.estimates.__class__({}), 5000, True)
+        return result
+
+    monkeypatch.setattr(episode.Episode, "look", look)
+    result = episode.run_episode(world, np.random.default_rng(0), poses="oracle")
+    assert result.occupied_looks == 0  # counted inside the real look, which saw nobody
+    assert len(calls) >= 4
+    assert [p.looks for p in result.picks][0] == 3  # two waits, then the pick
+    assert all(p.placed for p in result.picks), [p.note for p in result.picks]
+
+
+@pytest.fixture(scope="module")
+def with_person():
+    w = build_world(WorldConfig(workpieces=PARTS), np.random.default_rng(1))
+    return w, episode.run_episode(w, np.random.default_rng([1, 0]), poses="oracle", occluder=True)
+
+
+def test_with_the_person_about_the_arm_stops_for_them_and_never_touches_them(with_person):
+    _, result = with_person
+    assert result.protective_stops >= 1 and result.stopped_s > 0
+    assert result.min_human_clearance_mm > 0
+    assert all(p.placed for p in result.picks), [p.note for p in result.picks]
+
+
+def test_an_episode_with_the_person_is_reproducible(with_person):
+    _, first = with_person
+    w = build_world(WorldConfig(workpieces=PARTS), np.random.default_rng(1))
+    again = episode.run_episode(w, np.random.default_rng([1, 0]), poses="oracle", occluder=True)
+    assert again.sim_s == first.sim_s and again.protective_stops == first.protective_stops
+    for a, b in zip(first.picks, again.picks):
+        assert a.note == b.note and a.placed == b.placed
+    assert math.isclose(again.min_human_clearance_mm, first.min_human_clearance_mm)
