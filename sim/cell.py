@@ -23,7 +23,7 @@ from sim.world import World
 RAMP_S = 0.8  # s a move's joint-space ramp lasts
 SETTLE_S = 0.3  # s held at the goal after each move
 CART_STEP = 0.03  # m between IK waypoints of a straight-line tool move
-HUMAN_EVERY = 5  # physics steps between updates of the human's mocap poses (10 ms at 2 ms steps)
+HUMAN_EVERY = 10  # physics steps between updates of the person's mocap poses (20 ms at 2 ms steps)
 MONITOR_S = 0.25  # s of simulated time between workspace checks while the arm moves
 LOOK_PAN = math.pi / 2  # rad the shoulder pans from home to take the arm out of the camera's view
 MAX_STOP_S = 30.0  # s a protective stop may last before the episode gives up on the move
@@ -80,6 +80,7 @@ class ArmCell:
         self.pad_reach = float(max(m.geom_size[p][2] for p in self.pads))
         self.table = ["table_collision"]
         self.human, self.monitor, self.recorder = human, monitor, recorder
+        self._human_poses = None
         self.holding: str | None = None
         self.steps = 0
         self.protective_stops, self.stopped_s = 0, 0.0
@@ -104,21 +105,25 @@ class ArmCell:
     def _move_human(self) -> None:
         tool = T_world_site(self.model, self.data, self.cfg.tool_site)[:2, 3]
         poses = self.human.update(self.data.time, self.world.T_world_arm_base[:2, 3], tool)
-        self.world.apply_occluder(self.data, poses=poses)
+        if poses is not self._human_poses:
+            self.world.apply_occluder(self.data, poses=poses)
+            self._human_poses = poses
 
-    def step(self, n: int) -> None:
-        """Step the physics ``n`` times; a protective stop inserts extra steps with the targets held."""
+    def step(self, n: int, watch: bool = True) -> None:
+        """Step the physics ``n`` times; while ``watch``ing, a protective stop inserts extra steps with
+        the targets held."""
         for _ in range(n):
             self._physics_step()
-            if self.data.time >= self._next_check:
+            if watch and self.data.time >= self._next_check:
                 self._next_check = self.data.time + MONITOR_S
                 self._track_clearance()
                 if self.monitor is not None and self.monitor.occupied(self.data, self.holding):
                     self._protective_stop()
 
     def hold(self, seconds: float) -> None:
-        """Keep the current targets for ``seconds`` of simulated time (waiting, thinking)."""
-        self.step(max(0, round(seconds / self.model.opt.timestep)))
+        """Keep the current targets for ``seconds`` of simulated time (waiting, thinking); the arm is still,
+        so the monitor need not watch."""
+        self.step(max(0, round(seconds / self.model.opt.timestep)), watch=False)
 
     def _protective_stop(self) -> None:
         self.protective_stops += 1

@@ -1,0 +1,155 @@
+"""Seeded pick-and-place episodes in both pose modes, side by side, on one core.
+
+Each seed builds the task's cell once per mode (the same layout in both) and runs the scripted
+episode: with the true poses (oracle) and with PSORR's poses from the Kinect (recognized). The
+person reaches over the table in both (``--occluder off`` to remove them), so the gap between
+the modes is what recognition costs. Success is judged on the simulator's truth (sim/pick.py).
+
+Targets (issue 4): recognized grasp success >= 95% and within 3 points of oracle; place
+success >= 90%; under 20 s of wall time per episode on one core.
+
+    python benchmarks/episodes.py [--episodes 50] [--seed 0] [--task tasks/demo.yaml] [--occluder on|off]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from collections import defaultdict
+from pathlib import Path
+
+import _single_core  # noqa: F401  (must precede numpy)
+import numpy as np
+from tqdm import tqdm
+
+from psorr.errors import PsorrError
+from sim.cli import summarize
+from sim.episode import run_episode
+from sim.tasks import load_task
+from sim.world import build_world
+
+ROOT = Path(__file__).resolve().parents[1]
+MODES = ("oracle", "recognized")
+TARGETS = {"grasp": 0.95, "gap_points": 3.0, "place": 0.90, "wall_s": 20.0}
+
+
+def _row(mode: str, results) -> dict:
+    summary = summarize(results, len(results))
+    walls = [r.wall_s for r in results]
+    return {"mode": mode, **summary,
+            "wall_s_median": float(np.median(walls)), "wall_s_max": float(np.max(walls)),
+            "sim_s_mean": float(np.mean([r.sim_s for r in results])),
+            "looks_per_episode": float(np.mean([r.looks for r in results])),
+            "occupied_looks": int(sum(r.occupied_looks for r in results)),
+            "protective_stops": int(sum(r.protective_stops for r in results)),
+            "min_human_clearance_mm": float(min(r.min_human_clearance_mm for r in results))}
+
+
+def _per_part(results) -> dict[str, tuple[int, int, int]]:
+    """part -> (picks, grasped, placed)."""
+    counts = defaultdict(lambda: [0, 0, 0])
+    for r in results:
+        for p in r.picks:
+            c = counts[p.part]
+            c[0], c[1], c[2] = c[0] + 1, c[1] + p.grasped, c[2] + p.placed
+    return {k: tuple(v) for k, v in sorted(counts.items())}
+
+
+def _plot(path: Path, per_part: dict, rows: list[dict]) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    parts = sorted(set().union(*(per_part[m] for m in MODES)))
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(12, 4), gridspec_kw={"width_ratios": [3, 1]})
+    width = 0.2
+    for k, (mode, what, idx) in enumerate([(m, w, i) for m in MODES for w, i in (("grasp", 1), ("place", 2))]):
+        rates = [per_part[mode][p][idx] / max(per_part[mode][p][0], 1) if p in per_part[mode] else 0 for p in parts]
+        ax.bar(np.arange(len(parts)) + (k - 1.5) * width, rates, width, label=f"{mode} {what}",
+               color=["#9ecae1", "#3182bd", "#fdae6b", "#e6550d"][k])
+    ax.set_xticks(np.arange(len(parts)), parts)
+    ax.set_ylim(0, 1.05)
+    ax.set_ylabel("success rate")
+    ax.axhline(TARGETS["place"], color="k", lw=0.8, ls="--")
+    ax.legend(fontsize=8, ncol=2)
+    ax.set_title("success per part")
+    bx.bar(MODES, [r["wall_s_per_episode"] for r in rows], color=["#3182bd", "#e6550d"])
+    bx.axhline(TARGETS["wall_s"], color="k", lw=0.8, ls="--")
+    bx.set_ylabel("wall s per episode (1 core)")
+    bx.set_title("time")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--episodes", type=int, default=50)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--task", default=str(ROOT / "tasks" / "demo.yaml"))
+    parser.add_argument("--occluder", choices=("on", "off"), default="on")
+    parser.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "results")
+    args = parser.parse_args(argv)
+    try:
+        task = load_task(args.task)
+    except PsorrError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    results = {m: [] for m in MODES}
+    start = time.perf_counter()
+    for episode in tqdm(range(args.episodes), desc="episodes (both modes)", file=sys.stderr):
+        for mode in MODES:
+            rng = np.random.default_rng([args.seed, episode])
+            world = build_world(task.world, rng)
+            results[mode].append(run_episode(world, rng, poses=mode, occluder=args.occluder == "on"))
+    rows = [_row(m, results[m]) for m in MODES]
+    per_part = {m: _per_part(results[m]) for m in MODES}
+    oracle, rec = rows
+
+    lines = [f"{args.episodes} seeded episodes of {Path(args.task).name} per mode, occluder {args.occluder}, "
+             f"1 core ({time.perf_counter() - start:.0f} s in all)", "",
+             "| mode | picks | grasp | place | pose err mm (median) | rot err deg (median) | wall s/episode "
+             "(mean / median / max) | looks/episode | waits | stops | closest to person mm |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        pe = "-" if r["pose_error_mm_median"] is None else f"{r['pose_error_mm_median']:.1f}"
+        re = "-" if r["rot_error_deg_median"] is None else f"{r['rot_error_deg_median']:.1f}"
+        lines.append(f"| {r['mode']} | {r['picks']} | {r['grasp_success_rate']:.1%} | {r['place_success_rate']:.1%} | "
+                     f"{pe} | {re} | {r['wall_s_per_episode']:.1f} / {r['wall_s_median']:.1f} / "
+                     f"{r['wall_s_max']:.1f} | {r['looks_per_episode']:.1f} | {r['occupied_looks']} | "
+                     f"{r['protective_stops']} | {r['min_human_clearance_mm']:.0f} |")
+    lines += ["", "| part | " + " | ".join(f"{m} grasp | {m} place" for m in MODES) + " |",
+              "|---|" + "---|" * (2 * len(MODES))]
+    for part in sorted(set().union(*(per_part[m] for m in MODES))):
+        cells = []
+        for m in MODES:
+            n, g, p = per_part[m].get(part, (0, 0, 0))
+            cells += [f"{g}/{n}", f"{p}/{n}"]
+        lines.append(f"| {part} | " + " | ".join(cells) + " |")
+    gap = 100 * (oracle["grasp_success_rate"] - rec["grasp_success_rate"])
+    checks = [
+        ("recognized grasp success >= 95%", rec["grasp_success_rate"] >= TARGETS["grasp"]),
+        (f"within 3 points of oracle (gap {gap:.1f})", gap <= TARGETS["gap_points"]),
+        ("recognized place success >= 90%", rec["place_success_rate"] >= TARGETS["place"]),
+        ("under 20 s per episode", max(r["wall_s_per_episode"] for r in rows) < TARGETS["wall_s"]),
+    ]
+    lines += ["", "Targets: " + "; ".join(f"{what}: {'met' if ok else 'MISSED'}" for what, ok in checks)]
+    print("\n".join(lines))
+
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "episodes.md").write_text("\n".join(lines) + "\n")
+    notes = {m: [{"episode": i, "part": p.part, "grasped": p.grasped, "placed": p.placed,
+                  "pose_error_mm": p.pose_error_mm, "rot_error_deg": p.rot_error_deg, "looks": p.looks, "note": p.note}
+                 for i, r in enumerate(results[m]) for p in r.picks] for m in MODES}
+    (args.out / "episodes.json").write_text(json.dumps({"rows": rows, "per_part": per_part, "picks": notes},
+                                                       indent=1, default=float))
+    _plot(args.out / "episodes.png", per_part, rows)
+    print(f"wrote {args.out / 'episodes.md'}, .json and .png", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
