@@ -1,0 +1,9 @@
+"""The simulated robot cell (MuJoCo). ``gymnasium.make("psorr/PickPlace-v0")`` gives :class:`sim.env.PickPlaceEnv`."""
+
+import gymnasium
+
+ENV_ID = "psorr/PickPlace-v0"
+
+# Registering an id twice warns (a reload, or a second import under another name): register once.
+if ENV_ID not in gymnasium.envs.registry:
+    gymnasium.register(id=ENV_ID, entry_point="sim.env:PickPlaceEnv")

@@ -1,0 +1,168 @@
+"""The gymnasium env for task-level planners (sim/env.py). Headless; oracle poses keep it fast (~1 s per pick)."""
+
+import importlib
+import warnings
+from types import MappingProxyType
+
+import gymnasium
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+import sim
+from psorr.errors import InvalidInputError
+from sim.env import REFUSED_REWARD, WAIT_REWARD, PickPlaceEnv
+from sim.episode import Episode
+from sim.perception import Look
+from sim.world import WorldConfig
+
+PARTS = ("u_channel", "chassis")
+CONFIG = WorldConfig(workpieces=PARTS, occluder=False)
+SEED = 3
+WAIT = len(PARTS)
+
+
+def make(**kwargs) -> PickPlaceEnv:
+    return PickPlaceEnv(**{"task": CONFIG, "poses": "oracle", "occluder": False, **kwargs})
+
+
+def state(env: PickPlaceEnv) -> tuple:
+    data = env.unwrapped.world.data
+    return data.time, data.qpos.copy(), data.qvel.copy(), data.ctrl.copy(), data.mocap_pos.copy()
+
+
+def test_check_env_passes_without_warnings():
+    env = gymnasium.make("psorr/PickPlace-v0", task=CONFIG, poses="oracle", occluder=False,
+                         render_mode="rgb_array", max_steps=10)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        check_env(env.unwrapped)
+    assert [str(w.message) for w in caught] == []
+    obs, _ = env.reset(seed=SEED)
+    assert env.render().shape == (480, 640, 3)
+    assert obs["depth"].shape == (480, 640) and not obs["depth"].any()  # oracle looks take no picture
+    env.close()
+    env.close()
+
+
+def test_make_and_registration():
+    importlib.reload(sim)  # a second registration must neither raise nor warn
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        importlib.reload(sim)
+    env = gymnasium.make("psorr/PickPlace-v0", task=CONFIG, poses="oracle", occluder=False)
+    assert isinstance(env.unwrapped, PickPlaceEnv)
+    assert env.action_space == gymnasium.spaces.Discrete(len(PARTS) + 1)
+    obs, info = env.reset(seed=SEED)
+    assert obs in env.observation_space
+    assert obs["seen"].tolist() == [1, 1] and obs["scores"].tolist() == [1.0, 1.0]
+    assert info["action_mask"].tolist() == [1, 1, 1] and info["pick"] is None
+    env.close()
+
+
+def test_task_path_is_resolved_from_the_repo_root(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    env = PickPlaceEnv(task="tasks/demo.yaml")
+    assert env.parts == ("u_channel", "chassis", "transformer", "flanged_hub")
+    assert env.observation_space["poses"].shape == (4, 7) and env.action_space.n == 5
+
+
+@pytest.mark.parametrize("kwargs, names", [
+    ({"poses": "guess"}, "oracle"), ({"render_mode": "human"}, "rgb_array"),
+    ({"task": 42}, "WorldConfig"), ({"max_steps": 0}, "positive"),
+])
+def test_bad_arguments_name_the_valid_choices(kwargs, names):
+    with pytest.raises(InvalidInputError, match=names):
+        make(**kwargs)
+
+
+def test_same_seed_gives_the_same_observations_and_rewards():
+    runs = []
+    for _ in range(2):
+        env = make()
+        obs, _ = env.reset(seed=SEED)
+        steps = [(obs, 0.0)]
+        for action in (WAIT, 0):
+            obs, reward, *_ = env.step(action)
+            steps.append((obs, reward))
+        runs.append((steps, env.episode.picks[0]))
+        env.close()
+    (first, pick_a), (again, pick_b) = runs
+    assert pick_a == pick_b and pick_a.placed
+    for (obs_a, r_a), (obs_b, r_b) in zip(first, again):
+        assert r_a == r_b
+        assert obs_a.keys() == obs_b.keys() and all(np.array_equal(obs_a[k], obs_b[k]) for k in obs_a)
+    assert [r for _, r in first] == [0.0, WAIT_REWARD, 2.0]
+
+
+def blind_to(part: str | None):
+    """A look that did not return ``part`` (None: a look that found someone reaching in)."""
+    real = Episode.look
+
+    def look(self):
+        seen = real(self)
+        if part is None:
+            return Look(seen.frame, (), MappingProxyType({}), 5000, True)
+        kept = {p: e for p, e in seen.estimates.items() if p != part}
+        return Look(seen.frame, seen.detections, MappingProxyType(kept), seen.intruding, seen.occupied)
+
+    return look
+
+
+@pytest.mark.parametrize("hidden, why", [("chassis", "no pose of chassis"), (None, "reaching over the table")])
+def test_a_pick_the_latest_look_does_not_allow_is_refused_without_moving(monkeypatch, hidden, why):
+    monkeypatch.setattr(Episode, "look", blind_to(hidden))
+    env = make()
+    obs, info = env.reset(seed=SEED)
+    part = PARTS.index(hidden or "chassis")
+    assert obs["seen"][part] == 0 and info["action_mask"][part] == 0
+    before = state(env)
+    obs_after, reward, terminated, truncated, info = env.step(part)
+    after = state(env)
+    assert why in info["refused"] and info["pick"] is None
+    assert reward == REFUSED_REWARD and not terminated and not truncated
+    assert before[0] == after[0] and all(np.array_equal(a, b) for a, b in zip(before[1:], after[1:]))
+    assert all(np.array_equal(obs[k], obs_after[k]) for k in obs)
+    assert env.episode.picks == [] and env.episode.remaining == list(PARTS)
+    env.close()
+
+
+def test_an_oracle_run_picks_every_part_from_the_latest_look(monkeypatch):
+    """Picks only use a pose the latest look returned; a second pick of a part is refused."""
+    latest, picked = [], []
+    real_look, real_pick = Episode.look, Episode.pick
+
+    def spy_look(self):
+        latest[:] = [real_look(self)]
+        return latest[0]
+
+    def spy_pick(self, part, T, looks=1):
+        picked.append(any(E is T for E, _ in latest[0].estimates[part]))
+        return real_pick(self, part, T, looks)
+
+    monkeypatch.setattr(Episode, "look", spy_look)
+    monkeypatch.setattr(Episode, "pick", spy_pick)
+    env = make()
+    env.reset(seed=SEED)
+    total, outcomes = 0.0, []
+    for action in (0, 0, 1):
+        obs, reward, terminated, truncated, info = env.step(action)
+        total += reward
+        outcomes.append((terminated, truncated, info["refused"]))
+    assert picked == [True, True]
+    assert outcomes[1] == (False, False, "u_channel was picked already")
+    assert outcomes[2][:2] == (True, False)
+    assert total == pytest.approx(4.0 + REFUSED_REWARD)
+    assert obs["done"].tolist() == [1, 1] and obs["seen"].tolist() == [0, 0]
+    assert all(p.grasped and p.placed for p in env.episode.result().picks)
+    env.close()
+
+
+def test_max_steps_truncates_and_gives_the_rest_up():
+    env = make(max_steps=2)
+    env.reset(seed=SEED)
+    assert env.step(WAIT)[3] is False
+    _, _, terminated, truncated, info = env.step(WAIT)
+    assert (terminated, truncated) == (False, True) and "2 steps" in info["gave_up"]
+    assert [p.note for p in env.episode.result().picks] == [info["gave_up"]] * len(PARTS)
+    env.close()
