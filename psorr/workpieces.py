@@ -10,7 +10,6 @@ metres and kilograms; transforms are 4x4 arrays in the part's model frame
 from __future__ import annotations
 
 import functools
-
 import json
 import math
 from dataclasses import dataclass
