@@ -76,6 +76,8 @@ class ArmCell:
         self.qadr = np.array([m.joint(j).qposadr[0] for j in cfg.arm_joints])
         self.gripper = m.actuator(cfg.gripper_actuator).id
         self.pads = [m.geom(g).id for g in cfg.pad_geoms]
+        finger_bodies = {m.jnt_bodyid[m.joint(j).id] for j in cfg.finger_joints}
+        self.finger_geoms = {g for g in range(m.ngeom) if m.geom_bodyid[g] in finger_bodies}
         # The pads are centred on the tool site along its z: they reach this far beyond it.
         self.pad_reach = float(max(m.geom_size[p][2] for p in self.pads))
         self.table = ["table_collision"]

@@ -9,12 +9,14 @@ simulator's truth: only the estimate, the catalog and the robot's own kinematics
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
+import mujoco
 import numpy as np
 
 from psorr.workpieces import Grasp
-from sim.cell import ArmCell
+from sim.cell import ArmCell, kinematics
 from sim.ik import UnreachableTargetError
 
 PRE_GRASP = 0.10  # m back along -approach before the approach
@@ -120,12 +122,42 @@ def plan_grasp(cell: ArmCell, part: str, T_est: np.ndarray) -> tuple[GraspPlan |
             q_grasp = cell.solve(q_pre, T_grasp)
             T_above = shift(T_place, [0, 0, T_grasp[2, 3] + LIFT - T_place[2, 3]])
             q_above = cell.solve(q_grasp, T_above)
-            cell.solve(q_above, T_place)
+            q_place = cell.solve(q_above, T_place)
         except UnreachableTargetError as exc:
             reasons.append(f"{grasp.name}{' flipped' if flip else ''}: {exc}")
             continue
+        problem = next(filter(None, (configuration_problem(cell, q) for q in (q_pre, q_grasp, q_above, q_place))), "")
+        if problem:
+            reasons.append(f"{grasp.name}{' flipped' if flip else ''}: {problem}")
+            continue
         return GraspPlan(grasp, T_grasp, T_place, q_pre, q_grasp, q_above, clears), ""
     return None, "; ".join(reasons) or "the part has no grasps"
+
+
+def configuration_problem(cell: ArmCell, q: np.ndarray) -> str:
+    """Why the arm should not go to ``q`` (nq,), or "" if it may.
+
+    The IK is local: from some starts it converges to a wound-up configuration (the upper arm
+    swung down behind the base) whose tool pose is right but which the arm can only reach by
+    sweeping through the table. Such solutions, and any whose links (pads and fingers aside,
+    which belong near the part) touch the table, a part or a fixture, are refused.
+    """
+    lift = float(q[cell.qadr[1]])
+    if not -math.pi <= lift <= 0.0:
+        return f"wound-up arm (shoulder lift {math.degrees(lift):.0f} deg, outside [-180, 0])"
+    model = cell.model
+    data = kinematics(cell.world, q)
+    tool_z = float(data.site_xpos[model.site(cell.cfg.tool_site).id][2])
+    if tool_z < cell.world.table_top:  # a link through the table can escape the contact test below
+        return f"the tool would be {1e3 * (cell.world.table_top - tool_z):.0f} mm under the table top"
+    mujoco.mj_collision(model, data)
+    links = {model.geom(g).id for g in cell.cfg.collision_geoms} - set(cell.pads) - cell.finger_geoms
+    for contact in data.contact[: data.ncon]:
+        pair = {contact.geom1, contact.geom2}
+        if pair & links and not pair <= links and contact.dist < 0:
+            other = (pair - links).pop()
+            return f"the arm would touch {model.geom(other).name or model.body(model.geom_bodyid[other]).name}"
+    return ""
 
 
 def upright_equivalent(T_est: np.ndarray, info) -> np.ndarray:
