@@ -100,10 +100,12 @@ def _run(args) -> int:
             from sim.record import EpisodeRecorder
 
             recorder = EpisodeRecorder(Path(args.record), f"episode_{args.seed}_{episode}")
-        result = run_episode(world, rng, poses=args.poses, occluder=occluder, recorder=recorder)
-        if recorder is not None:
-            for path in recorder.close():
-                _log(f"wrote {path}")
+        try:
+            result = run_episode(world, rng, poses=args.poses, occluder=occluder, recorder=recorder)
+        finally:  # an unfinished MP4 would leave its ffmpeg process running
+            if recorder is not None:
+                for path in recorder.close():
+                    _log(f"wrote {path}")
         results.append(result)
         rows += [(episode, p) for p in result.picks]
     summary = summarize(results, args.episodes)

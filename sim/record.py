@@ -1,0 +1,329 @@
+"""Recording an episode: an MP4 of the cell as it runs and a PNG contact sheet of its looks and grasps.
+
+:class:`EpisodeRecorder` is the :class:`sim.cell.Recorder` that ``psorr-sim run --record DIR`` hands
+to each episode. Every ``1 / fps`` s of simulated time it renders two panels side by side, the
+Kinect's view and a 3/4 overview of the cell, with a caption of the sim time and what the robot
+last did. Each look that got past the person (the robot saw the table, recognised or was told
+the poses) becomes a row of the sheet: the Kinect's RGB, the depth cloud (shaded by height above
+the table) with the models drawn at the poses the look returned (the oracle's on the RGB), and a
+close-up of the gripper if a grasp followed that look.
+
+Rendering is the cost: both panels use one MuJoCo renderer of its own, without shadows or
+multisampling (on a CPU-only GL each costs several times the frame), on a copy of the model so the
+episode's own renderers keep theirs. ffmpeg encodes in its own process, alongside the physics.
+About 15 ms per frame here, plus ffmpeg's 6 ms of CPU: ~0.2 s of wall time per simulated second.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from collections import deque
+from dataclasses import dataclass
+from pathlib import Path
+
+import imageio
+import mujoco
+import numpy as np
+from PIL import Image, ImageDraw, ImageFont
+
+from psorr.errors import InvalidInputError, PsorrError
+from sim.ik import T_world_site
+from sim.render_backend import ensure_headless_gl
+from sim.world import World
+
+PANEL_W, PANEL_H = 480, 360  # px of each video panel (the Kinect's 4:3)
+CAPTION_H = 24  # px of the caption strip under the panels (keeps the frame height a multiple of 16)
+SHEET_ROWS = 8  # the sheet shows the last this many looks
+MODEL_POINTS = 1500  # model surface points drawn per detection on the sheet
+BANNER_S = 1.5  # s of simulated time a look's or grasp's caption stays on the video
+# The overview looks from the arm's side (-x, -y) across the table, so the person at +x faces the camera.
+OVERVIEW_AZIMUTH, OVERVIEW_ELEVATION = 60.0, -25.0  # deg
+OVERVIEW_DISTANCE, OVERVIEW_ABOVE_TABLE = 1.5, 0.2  # m from the look-at point; m of it above the table centre
+CLOSE_UP_ELEVATION, CLOSE_UP_DISTANCE = -15.0, 0.3  # deg; m from the tool site
+
+
+class RecordingError(PsorrError):
+    """The recording cannot be written; the message names the path and the fix."""
+
+
+@dataclass(frozen=True, eq=False)
+class ModelOverlay:
+    """One model drawn on a look's depth image: its name, score and pixels (N, 2) (u right, v down)."""
+
+    name: str
+    score: float
+    pixels: np.ndarray
+
+
+@dataclass(eq=False)
+class SheetRow:
+    """One look on the contact sheet, and the grasp that followed it.
+
+    Attributes:
+        look: 1-based index of the look in the episode; sim_s: its simulated time (s).
+        rgb: (H, W, 3) uint8 Kinect view.
+        depth_shade: (H, W) float32 in [0, 1] grey of the depth cloud by height above the table (dark: tall;
+            white: no return or below the table), None for oracle looks.
+        overlays: the models at the poses the look returned (recognised, or the truth for the oracle).
+        grasp: (PANEL_H, PANEL_W, 3) uint8 close-up of the gripper at its grasp, None when none followed.
+        grasp_part: the part grasped ("" when none).
+    """
+
+    look: int
+    sim_s: float
+    rgb: np.ndarray
+    depth_shade: np.ndarray | None
+    overlays: tuple[ModelOverlay, ...]
+    grasp: np.ndarray | None = None
+    grasp_part: str = ""
+
+
+class EpisodeRecorder:
+    """Writes ``directory/<name>.mp4`` and ``directory/<name>_sheet.png`` for one episode.
+
+    Args:
+        directory: where the files go; created if missing.
+        name: file stem, e.g. ``"episode_0_1"``.
+        fps: video frames per second of simulated time.
+
+    Attributes:
+        looks, occupied_looks, grasps: counted so far (occupied looks found the person reaching in).
+
+    Raises:
+        RecordingError: ``directory`` cannot be created (e.g. it is an existing file).
+        InvalidInputError: fps is not positive.
+
+    Use for one episode (one world), then call :meth:`close` to get the files.
+    """
+
+    def __init__(self, directory: Path, name: str, fps: float = 10.0):
+        if fps <= 0:
+            raise InvalidInputError(f"fps must be > 0, got {fps}; the default is 10")
+        directory = Path(directory)
+        try:
+            directory.mkdir(parents=True, exist_ok=True)
+        except (FileExistsError, NotADirectoryError):
+            raise RecordingError(f"cannot record into {directory}: it or one of its parents is a file; pass a "
+                                 "directory path to --record (it is created if missing)") from None
+        except OSError as exc:
+            raise RecordingError(f"cannot create {directory} ({exc.strerror}): pass a writable directory "
+                                 "to --record") from None
+        self.fps, self.name = float(fps), name
+        self.video_path = directory / f"{name}.mp4"
+        self.sheet_path = directory / f"{name}_sheet.png"
+        self._next_frame_s = 0.0
+        self._caption, self._caption_until_s = "", -math.inf  # what the robot last did, shown until then (sim s)
+        self.looks = self.occupied_looks = self.grasps = 0
+        self._rows_made = 0  # looks that got past the person, plus grasps no such look led to
+        self._rows: deque[SheetRow] = deque(maxlen=SHEET_ROWS)
+        self._renderer: mujoco.Renderer | None = None
+        self._writer = None
+        self._model_points: dict[str, np.ndarray] = {}
+        self._written: list[Path] | None = None
+        self._font = ImageFont.load_default(size=14)
+
+    # -------------------------------------------------------------------------------- Recorder protocol
+
+    def tick(self, world: World, data: mujoco.MjData) -> None:
+        """After each physics step: a video frame when ``data.time`` reaches the next frame time."""
+        if data.time + 1e-9 < self._next_frame_s:
+            return
+        self._next_frame_s = (math.floor(data.time * self.fps + 1e-6) + 1) / self.fps
+        kinect = self._render(world, data, world.camera_name)
+        overview = self._render(world, data, _free_camera((0.0, 0.0, world.table_top + OVERVIEW_ABOVE_TABLE),
+                                                          OVERVIEW_AZIMUTH, OVERVIEW_ELEVATION, OVERVIEW_DISTANCE))
+        caption = f"t = {data.time:5.1f} s"
+        if data.time <= self._caption_until_s:
+            caption += f"   {self._caption}"
+        frame = np.concatenate([np.concatenate([kinect, overview], axis=1), self._caption_strip(caption)], axis=0)
+        if self._writer is None:
+            # The frame is 960x384, a multiple of 16 (no resizing); "veryfast" halves x264's CPU at the same size.
+            self._writer = imageio.get_writer(self.video_path, fps=self.fps, codec="libx264", quality=6,
+                                              macro_block_size=16, pixelformat="yuv420p",
+                                              output_params=["-preset", "veryfast"])
+        self._writer.append_data(frame)
+
+    def looked(self, world: World, data: mujoco.MjData, look, library) -> None:
+        """After each look: caption it, and keep a sheet row unless the person was in the way."""
+        self.looks += 1
+        n = self.looks
+        if look.occupied:
+            self.occupied_looks += 1
+            self._show(data, f"look {n}: person in view, waiting")
+            return
+        if look.frame is not None:
+            rgb, depth_shade = look.frame.rgb, _height_shade(look.frame, world.table_top)
+            models = [(d.model, d.score, self._points(world, library, d.model), np.asarray(d.T_cloud_model))
+                      for d in look.detections]
+        else:  # the oracle: no frame, the true poses; draw them on the camera's RGB
+            rgb, depth_shade = self._render(world, data, world.camera_name), None
+            T_camera_world = np.linalg.inv(world.T_world_camera)
+            models = [(part, ests[0][1], self._points(world, None, part), T_camera_world @ ests[0][0])
+                      for part, ests in look.estimates.items()]
+        scale = rgb.shape[1] / world.config.intrinsics.width
+        overlays = tuple(ModelOverlay(name, float(score), _project(pts, T, world, scale))
+                         for name, score, pts, T in models)
+        self._rows.append(SheetRow(n, float(data.time), rgb, depth_shade, overlays))
+        self._rows_made += 1
+        found = ", ".join(f"{o.name} {o.score:.2f}" for o in overlays) or "nothing recognised"
+        self._show(data, f"look {n}: {found}")
+
+    def grasped(self, world: World, data: mujoco.MjData, part: str) -> None:
+        """When the gripper has closed on ``part``: a close-up for the row of the look that led to it."""
+        self.grasps += 1
+        close_up = self._render(world, data, _close_up_camera(world, data))
+        if not self._rows or self._rows[-1].grasp is not None:  # a grasp no look of ours led to
+            self._rows.append(SheetRow(0, float(data.time), np.zeros_like(close_up), None, ()))
+            self._rows_made += 1
+        self._rows[-1].grasp, self._rows[-1].grasp_part = close_up, part
+        self._show(data, f"grasped {part}")
+
+    # -------------------------------------------------------------------------------- output
+
+    @property
+    def rows(self) -> tuple[SheetRow, ...]:
+        """The sheet's rows so far (the last SHEET_ROWS), oldest first."""
+        return tuple(self._rows)
+
+    def close(self) -> list[Path]:
+        """Finish the MP4, write the sheet, free the renderer; return the files written (MP4 only if ticked)."""
+        if self._written is not None:
+            return list(self._written)
+        written = []
+        if self._writer is not None:
+            self._writer.close()
+            written.append(self.video_path)
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+        waited = f", {self.occupied_looks} found the person reaching in (not shown)" if self.occupied_looks else ""
+        capped = f"; the last {len(self._rows)} of {self._rows_made} rows" if self._rows_made > len(self._rows) else ""
+        _write_sheet(self.sheet_path, list(self._rows), f"{self.name}: {self.looks} looks{waited}, "
+                     f"{self.grasps} grasps{capped}")
+        self._written = written + [self.sheet_path]
+        return list(self._written)
+
+    # -------------------------------------------------------------------------------- helpers
+
+    def _show(self, data: mujoco.MjData, text: str) -> None:
+        self._caption, self._caption_until_s = text, data.time + BANNER_S
+
+    def _render(self, world: World, data: mujoco.MjData, camera) -> np.ndarray:
+        """(PANEL_H, PANEL_W, 3) uint8 view of ``data`` from a named camera or an ``MjvCamera``."""
+        if self._renderer is None:
+            ensure_headless_gl()
+            model = copy.copy(world.model)  # a copy: these are read when the GL context is made
+            model.vis.quality.offsamples = 0
+            # Coarser capsules and cylinders (the person, the table legs) look the same at this size, ~30% faster.
+            model.vis.quality.numslices, model.vis.quality.numstacks = 12, 6
+            self._renderer = mujoco.Renderer(model, PANEL_H, PANEL_W)
+            self._renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = False
+        self._renderer.update_scene(data, camera=camera)
+        return self._renderer.render().copy()
+
+    def _caption_strip(self, text: str) -> np.ndarray:
+        strip = Image.new("RGB", (2 * PANEL_W, CAPTION_H), (20, 20, 20))
+        ImageDraw.Draw(strip).text((8, 4), text, fill=(235, 235, 235), font=self._font)
+        return np.asarray(strip)
+
+    def _points(self, world: World, library, part: str) -> np.ndarray:
+        """(<= MODEL_POINTS, 3) surface points of ``part`` in its model frame (metres)."""
+        if part not in self._model_points:
+            if library is not None:
+                pts = library.model(part).points
+            else:
+                import trimesh
+
+                pts = trimesh.sample.sample_surface(world.catalog[part].load_mesh(), MODEL_POINTS, seed=0)[0]
+            self._model_points[part] = np.asarray(pts)[:: max(1, len(pts) // MODEL_POINTS)]
+        return self._model_points[part]
+
+
+def _free_camera(lookat, azimuth: float, elevation: float, distance: float) -> mujoco.MjvCamera:
+    """A free camera at ``distance`` (m) from ``lookat`` (3,), from ``azimuth`` and ``elevation`` (deg)."""
+    camera = mujoco.MjvCamera()
+    camera.type = mujoco.mjtCamera.mjCAMERA_FREE
+    camera.lookat[:] = lookat
+    camera.azimuth, camera.elevation, camera.distance = azimuth, elevation, distance
+    return camera
+
+
+def _close_up_camera(world: World, data: mujoco.MjData) -> mujoco.MjvCamera:
+    """Looks at the tool site along the tool's y, so the pads (closing along x) are seen side by side."""
+    T = T_world_site(world.model, data, world.arm.tool_site)
+    azimuth = math.degrees(math.atan2(T[1, 1], T[0, 1]))
+    return _free_camera(T[:3, 3], azimuth, CLOSE_UP_ELEVATION, CLOSE_UP_DISTANCE)
+
+
+def _height_shade(frame, table_top: float) -> np.ndarray:
+    """(H, W) grey in [0, 1] of a Kinect frame's cloud by height above the table: the table light, anything
+    standing on it darker the taller it is, below the table and no return white.
+
+    Height, not depth: across the tilted table depth changes by ~0.3 m, which would drown a 2 cm part.
+    """
+    cloud, T = frame.cloud, frame.T_world_camera
+    height = (cloud.points @ T[2, :3] + T[2, 3] - table_top).reshape(cloud.height, cloud.width)
+    height = np.nan_to_num(height, nan=-1.0)
+    # 3 mm of dead band hides the sensor's noise on the table; 3 cm and taller is darkest.
+    shade = 0.85 - 0.75 * np.clip((height - 0.003) / 0.03, 0.0, 1.0)
+    return np.where(height > -0.02, shade, 1.0).astype(np.float32)
+
+
+def _project(points: np.ndarray, T_camera_model: np.ndarray, world: World, scale: float) -> np.ndarray:
+    """Pixels (N, 2) of model points (N, 3) at ``T_camera_model`` (OpenCV camera frame) in an image
+    ``scale`` times the camera's size; points behind the camera are dropped."""
+    cam = points @ T_camera_model[:3, :3].T + T_camera_model[:3, 3]
+    cam = cam[cam[:, 2] > 1e-3]
+    k = world.config.intrinsics
+    u, v = k.fx * cam[:, 0] / cam[:, 2] + k.cx, k.fy * cam[:, 1] / cam[:, 2] + k.cy
+    return scale * np.column_stack([u + 0.5, v + 0.5]) - 0.5  # scale about pixel corners, not centres
+
+
+def _write_sheet(path: Path, rows: list[SheetRow], title: str) -> None:
+    """Rows of (Kinect RGB, depth with models, grasp close-up); models drawn as psorr.render draws detections."""
+    import matplotlib
+
+    matplotlib.use("Agg")  # headless: the sheet goes to a file, never to a window
+    import matplotlib.pyplot as plt
+
+    cmap = plt.get_cmap("tab10")
+    # One colour per model name across the sheet, so a part keeps its colour from row to row.
+    colour = {n: cmap(i % 10) for i, n in enumerate(dict.fromkeys(o.name for r in rows for o in r.overlays))}
+    fig, axes = plt.subplots(max(1, len(rows)), 3, figsize=(9.6, 2.55 * max(1, len(rows)) + 0.6), dpi=100,
+                             squeeze=False)
+    for ax in axes.ravel():
+        ax.set_axis_off()
+    for ax_row, row in zip(axes, rows):
+        rgb_ax, depth_ax, grasp_ax = ax_row
+        if row.look:
+            rgb_ax.imshow(row.rgb)
+            rgb_ax.set_title(f"look {row.look} at {row.sim_s:.1f} s", fontsize=8)
+            h, w = row.rgb.shape[:2]
+            if row.depth_shade is not None:
+                depth_ax.imshow(row.depth_shade, cmap="gray", vmin=0, vmax=1, interpolation="nearest")
+            else:
+                depth_ax.imshow(row.rgb, alpha=0.4)
+            for overlay in row.overlays:
+                u, v = overlay.pixels.T
+                depth_ax.scatter(u, v, s=0.6, color=colour[overlay.name], linewidths=0, alpha=0.8)
+                if len(u):
+                    depth_ax.annotate(f"{overlay.name} {overlay.score:.2f}", (np.median(u), v.min()),
+                                      color=colour[overlay.name], fontsize=7, ha="center", va="bottom", weight="bold")
+            depth_ax.set_xlim(0, w)
+            depth_ax.set_ylim(h, 0)
+            kind = "depth (dark: high), recognised" if row.depth_shade is not None else "oracle: true poses"
+            depth_ax.set_title(f"{kind} ({len(row.overlays)})", fontsize=8)
+        if row.grasp is not None:
+            grasp_ax.imshow(row.grasp)
+            grasp_ax.set_title(f"grasped {row.grasp_part}", fontsize=8)
+        else:
+            grasp_ax.text(0.5, 0.5, "no grasp after this look", ha="center", va="center", fontsize=8,
+                          color="0.5", transform=grasp_ax.transAxes)
+    if not rows:
+        axes[0, 1].text(0.5, 0.5, "no look got past the person", ha="center", va="center", fontsize=9,
+                        transform=axes[0, 1].transAxes)
+    fig.suptitle(title, fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path)  # the directory was checked when the recorder was made
+    plt.close(fig)
