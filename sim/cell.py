@@ -89,6 +89,8 @@ class ArmCell:
         self.min_human_clearance = math.inf
         self._next_check = 0.0
         self._arm_geoms = [m.geom(g).id for g in cfg.collision_geoms]
+        # Body ids are depth-first, so the arm's bodies in id order run from the base out to the hand.
+        self._arm_chain = sorted({int(m.geom_bodyid[g]) for g in self._arm_geoms} | {m.body(cfg.base_body).id})
         self._human_geoms = [m.geom(g).id for g in world.occluder_geoms] if human is not None else []
         if human is not None:
             self._move_human()
@@ -105,8 +107,10 @@ class ArmCell:
             self.recorder.tick(self.world, self.data)
 
     def _move_human(self) -> None:
+        # The person sees the whole arm: its footprint runs from the base through every link to the tool.
         tool = T_world_site(self.model, self.data, self.cfg.tool_site)[:2, 3]
-        poses = self.human.update(self.data.time, self.world.T_world_arm_base[:2, 3], tool)
+        footprint = np.vstack([self.data.xpos[self._arm_chain, :2], tool])
+        poses = self.human.update(self.data.time, footprint)
         if poses is not self._human_poses:
             self.world.apply_occluder(self.data, poses=poses)
             self._human_poses = poses

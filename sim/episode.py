@@ -48,7 +48,8 @@ class EpisodeResult:
     Attributes:
         picks: the picks.
         wall_s: wall time of the episode (s); sim_s: simulated time (s).
-        looks: looks taken; occupied_looks: of those, how many found someone reaching in.
+        looks: looks taken; occupied_looks: how often a look, or the check just before a pick,
+            found someone reaching in (each time the robot waited).
         protective_stops, stopped_s: times, and total seconds, the monitor held the arm.
         min_human_clearance_mm: least distance between the arm's and the human's geoms
             (simulator truth; inf without the human).
@@ -168,6 +169,12 @@ class Episode:
                     if blind >= MAX_BLIND_LOOKS:
                         self.give_up(f"not recognised in {blind} looks in a row")
                         break
+                    self.wait()
+                    continue
+                if self.cell.monitor is not None and self.perception.occupied(self.world.data, self.cell.holding):
+                    # They started reaching in while the robot thought: a plan made now would have to
+                    # steer round their arm, and the pose may be stale when they withdraw.
+                    self.occupied_looks += 1
                     self.wait()
                     continue
                 self.pick(*choice, looks=looks)

@@ -237,7 +237,7 @@ class ReachingHuman:
 
     Each reach starts ``gap_s`` after the last one ended (the first within ``first_s``). When one
     is due the person picks where to reach: one of ``targets`` (N, 2), or a random point on the
-    table, whose hand position stays ``keep_away`` from the robot arm's footprint (the segment
+    table, whose arm at the peak stays ``keep_away`` from the robot arm's footprint (the polyline
     from its base to its tool, seen from above); if there is none, the reach is put off by a
     second. So the person reacts to the robot, and the reaches depend on where it is, but a
     seed still gives the same episode: the robot's motion is deterministic too.
@@ -268,28 +268,29 @@ class ReachingHuman:
         """The reach under way, or the last one (a resting schedule before the first)."""
         return self.reaches[-1] if self.reaches else self._rest
 
-    def update(self, t: float, base_xy, tool_xy) -> dict[str, np.ndarray]:
-        """Advance to time ``t`` (s) with the robot's base and tool at ``base_xy``, ``tool_xy`` (m);
-        return the capsule poses as :func:`occluder_pose` does.
+    def update(self, t: float, robot_xy) -> dict[str, np.ndarray]:
+        """Advance to time ``t`` (s) with the robot arm's footprint at ``robot_xy`` ((N, 2) m, a polyline
+        from its base through its links to the tool, seen from above); return the capsule poses as
+        :func:`occluder_pose` does.
 
         A reach whose arm the robot's footprint comes within ``keep_away`` of is abandoned: the
         person pulls back from where the hand is.
         """
-        robot = (np.asarray(base_xy, dtype=float), np.asarray(tool_xy, dtype=float))
+        robot = np.asarray(robot_xy, dtype=float).reshape(-1, 2)
         if t >= self._next and (not self.reaches or t >= self.reaches[-1].end_s):
             candidates = np.vstack([self.targets, self._table_points(4)])
             self.rng.shuffle(candidates)
             for target in candidates:
                 reach = ReachSchedule.sample(self.rng, self.table_size, self.table_top, [target], self.eye,
                                              start_s=(t, t))
-                if self._clearance(reach, *robot) >= self.keep_away:
+                if self._clearance(reach, robot) >= self.keep_away:
                     self.reaches.append(reach)
                     self._next = reach.end_s + float(self.rng.uniform(*self.gap_s))
                     break
             else:
                 self._next = t + 1.0
         elif self.reaches and self.reaches[-1].start_s < t < self.reaches[-1].peak_s[1]:
-            if self._clearance(self.reaches[-1], *robot) < self.keep_away:
+            if self._clearance(self.reaches[-1], robot) < self.keep_away:
                 self.reaches[-1] = _withdrawn_at(self.reaches[-1], t)
                 self._next = self.reaches[-1].end_s + float(self.rng.uniform(*self.gap_s))
         reach = self.current
@@ -300,11 +301,13 @@ class ReachingHuman:
         self._resting = (reach, poses) if k == 0.0 else None
         return poses
 
-    def _clearance(self, reach: ReachSchedule, base_xy: np.ndarray, tool_xy: np.ndarray) -> float:
+    def _clearance(self, reach: ReachSchedule, robot_xy: np.ndarray) -> float:
         """Least distance, seen from above, between the person's arm at the reach's peak and the robot's."""
         shoulder = np.array([reach.edge_x + _SHOULDER_REACH[0], reach.shoulder_y])
         hand = np.asarray(reach.hand_xy)
-        return _segments_distance(shoulder, hand, base_xy, tool_xy)
+        if len(robot_xy) == 1:
+            robot_xy = np.vstack([robot_xy, robot_xy])
+        return min(_segments_distance(shoulder, hand, a, b) for a, b in zip(robot_xy[:-1], robot_xy[1:]))
 
     def _table_points(self, n: int) -> np.ndarray:
         half = np.asarray(self.table_size, dtype=float) / 2

@@ -85,22 +85,22 @@ def test_the_person_does_not_reach_where_the_arm_is():
     human = ReachingHuman(rng, (0.9, 1.0), 0.75, targets=[(0.1, 0.0)], keep_away=0.25)
     base, tool = np.array([-0.35, 0.0]), np.array([0.1, 0.0])  # the arm lies over the only target
     for t in np.arange(0.0, 20.0, 0.1):
-        human.update(t, base, tool)
+        human.update(t, [base, tool])
     # Random table points remain possible targets, but never one within reach of the arm's footprint.
     for reach in human.reaches:
-        assert human._clearance(reach, base, tool) >= 0.25
+        assert human._clearance(reach, np.array([base, tool])) >= 0.25
 
 
 def test_the_person_pulls_back_when_the_arm_comes_near_and_the_motion_is_continuous():
     rng = np.random.default_rng(0)
     human = ReachingHuman(rng, (0.9, 1.0), 0.75, targets=[(0.2, 0.3)], first_s=(0.0, 0.0))
     base, far_tool = np.array([-0.35, 0.0]), np.array([-0.3, -0.4])
-    human.update(0.0, base, far_tool)
+    human.update(0.0, [base, far_tool])
     reach = human.reaches[-1]
     t = reach.start_s + 0.6 * reach.reach_s
-    before = human.update(t, base, far_tool)
+    before = human.update(t, [base, far_tool])
     k = occlusion_at(human.current, t)
-    after = human.update(t + 1e-6, base, np.asarray(reach.hand_xy))  # the arm arrives where the hand goes
+    after = human.update(t + 1e-6, [base, np.asarray(reach.hand_xy)])  # the arm arrives where the hand goes
     assert human.current.end_s < reach.end_s  # cut short
     assert occlusion_at(human.current, t + 1e-6) == pytest.approx(k, abs=1e-3)
     for name in before:
