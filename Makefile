@@ -39,6 +39,8 @@ bench: setup
 	$(BIN)/python benchmarks/decompose.py
 	$(BIN)/python benchmarks/table1.py
 	$(BIN)/python benchmarks/peers.py   # the OpenCV peer needs: $(BIN)/pip install -e ".[bench]"
+	$(BIN)/python benchmarks/grasp_tolerance.py
+	$(BIN)/python benchmarks/episodes.py
 
 lint: setup
 	$(BIN)/ruff check psorr sim tests benchmarks

@@ -16,8 +16,8 @@ import mujoco
 import numpy as np
 
 from psorr.errors import PsorrError
+from sim.human import ReachingHuman
 from sim.ik import ArmIK, T_world_site, UnreachableTargetError
-from sim.occluder import ReachingHuman
 from sim.world import World
 
 RAMP_S = 0.8  # s a move's joint-space ramp lasts

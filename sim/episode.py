@@ -26,7 +26,7 @@ import numpy as np
 
 from psorr.errors import InvalidInputError
 from sim.cell import ArmCell, Recorder, WorkspaceBlockedError
-from sim.occluder import ReachingHuman
+from sim.human import ReachingHuman
 from sim.perception import Look, Perception
 from sim.pick import PickResult, fixture_error, pick_and_place, pose_error, resting_on_table
 from sim.world import World
@@ -34,7 +34,7 @@ from sim.world import World
 __all__ = ["Episode", "EpisodeResult", "PickResult", "fixture_error", "pick_and_place", "pose_error", "run_episode"]
 
 MIN_SCORE = 0.3  # detections scoring less are not trusted enough to grasp from
-MAX_BLIND_LOOKS = 3  # looks in a row with nothing pickable before the rest of the parts are given up
+MAX_BLIND_LOOKS = 5  # looks in a row with nothing pickable before the rest of the parts are given up
 WAIT_S = 0.5  # s waited before looking again
 THINK_S = 0.5  # s of simulated time a look (render and recognition) takes
 MAX_EPISODE_S = 240.0  # s of simulated time after which the remaining parts are given up

@@ -31,8 +31,9 @@ import mujoco
 import numpy as np
 
 from psorr.camera import CameraIntrinsics
-from psorr.errors import InvalidInputError, PsorrError
+from psorr.errors import InvalidInputError
 from psorr.workpieces import WorkpieceInfo, load_catalog
+from sim.layout import WorldBuildError, place_parts, yaw_matrix
 from sim.occluder import RADII, ReachSchedule, occluder_pose, segment_half_lengths
 from sim.robot import ArmConfig, apply_arm_options, load_arm_spec
 from sim.sensor import KINECT_V1_CAMERA, T_world_camera_opencv, check_intrinsics, fovy_deg
@@ -44,10 +45,6 @@ ARM_PREFIX = "arm/"
 HOME_KEY = "home"
 _GEOM = mujoco.mjtGeom
 _REBUILD = "build them with: .venv/bin/python assets/workpieces/build_collision.py"
-
-
-class WorldBuildError(PsorrError):
-    """The world cannot be assembled as configured; the message names the cause and the fix."""
 
 
 @dataclass(frozen=True)
@@ -191,11 +188,6 @@ def _quat(R) -> np.ndarray:
     return q
 
 
-def _yaw(theta: float) -> np.ndarray:
-    c, s = math.cos(theta), math.sin(theta)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-
-
 def collision_index() -> dict:
     """The CoACD index: part name -> {"files": [...], ...}; WorldBuildError if it was never built."""
     path = COLLISION_DIR / "index.json"
@@ -244,64 +236,6 @@ def _scene(spec: mujoco.MjSpec, cfg: WorldConfig) -> None:
     right, up = np.array([0.0, 1.0, 0.0]), np.array([-math.cos(theta), 0.0, math.sin(theta)])
     spec.worldbody.add_camera(name=CAMERA_NAME, pos=eye, quat=_quat(np.column_stack([right, up, np.cross(right, up)])),
                               fovy=fovy_deg(cfg.intrinsics))
-
-
-def _footprint(bounds, x: float, y: float, yaw: float, pad: float) -> np.ndarray:
-    """(4, 2) world corners of a model-frame footprint ``bounds`` ((2,) lo, (2,) hi) grown by ``pad``."""
-    (x0, y0), (x1, y1) = bounds[0] - pad, bounds[1] + pad
-    return np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]]) @ _yaw(yaw)[:2, :2].T + (x, y)
-
-
-def _overlap(a: np.ndarray, b: np.ndarray) -> bool:
-    """Whether two convex quads (4, 2) overlap (separating axis test)."""
-    for edge in np.concatenate([np.roll(a, -1, axis=0) - a, np.roll(b, -1, axis=0) - b]):
-        pa, pb = a @ (-edge[1], edge[0]), b @ (-edge[1], edge[0])
-        if pa.max() < pb.min() or pb.max() < pa.min():
-            return False
-    return True
-
-
-def _place(cfg: WorldConfig, items, base_xy, bare: mujoco.MjModel, home: str, rng: np.random.Generator) -> dict:
-    """Seeded non-overlapping (x, y, yaw) for each (key, bounds, pad): on the table, in reach, and seen by
-    the camera past the arm at home (``bare`` holds only table, arm and camera)."""
-    data = mujoco.MjData(bare)
-    mujoco.mj_resetDataKeyframe(bare, data, bare.key(home).id)
-    mujoco.mj_forward(bare, data)
-    T_world_camera = T_world_camera_opencv(bare, data, CAMERA_NAME)
-    T_camera_world, eye = np.linalg.inv(T_world_camera), T_world_camera[:3, 3]
-    half, top, size = np.asarray(cfg.table_size) / 2, cfg.table_height, np.array(cfg.intrinsics.shape[::-1])
-    groups, table = np.array([0, 0, 1, 0, 0, 0], np.uint8), bare.body("table").id
-
-    def fits(quad) -> bool:
-        dist = np.linalg.norm(quad - base_xy, axis=1)
-        if np.any(np.abs(quad) > half - 0.02) or dist.min() < cfg.reach[0] or dist.max() > cfg.reach[1]:
-            return False
-        points = np.column_stack([np.vstack([quad, quad.mean(0)]), np.full(5, top + 0.005)])
-        uv = cfg.intrinsics.project(points @ T_camera_world[:3, :3].T + T_camera_world[:3, 3])
-        if not (np.all(np.isfinite(uv)) and np.all(uv >= 20) and np.all(uv <= size - 21)):
-            return False
-        for point in points:  # nothing of the arm (visual group 2) between the camera and the point
-            ray, geom = point - eye, np.array([-1], np.int32)
-            hit = mujoco.mj_ray(bare, data, eye, ray / np.linalg.norm(ray), groups, 1, table, geom)
-            if 0 <= hit < np.linalg.norm(ray):
-                return False
-        return True
-
-    placed, quads = {}, []
-    for key, bounds, pad in sorted(items, key=lambda it: -np.prod(it[1][1] - it[1][0] + 2 * it[2])):
-        for _ in range(1000):
-            pose = (rng.uniform(-half[0], half[0]), rng.uniform(-half[1], half[1]), rng.uniform(0.0, 2 * np.pi))
-            quad = _footprint(bounds, *pose, pad)
-            if not any(_overlap(quad, other) for other in quads) and fits(quad):
-                placed[key] = pose
-                quads.append(quad)
-                break
-        else:
-            raise WorldBuildError(
-                f"found no free spot for {key} on the table: place fewer workpieces (got {len(cfg.workpieces)}), "
-                f"enlarge table_size or reach, or set fixtures=False"
-            )
-    return placed
 
 
 def _add_workpiece(spec, info: WorkpieceInfo, files: list[str], mesh, pos, quat) -> None:
@@ -381,17 +315,18 @@ def build_world(config: WorldConfig = WorldConfig(), rng: np.random.Generator | 
     if cfg.fixtures:
         pad = cfg.fixture_clearance + cfg.fixture_wall[0] + cfg.gap / 2
         items += [(f"{n}_fixture", bounds[n], pad) for n in cfg.workpieces]
-    spots = _place(cfg, items, base[:2], bare, arm.home_key, rng)
+    spots = place_parts(cfg, items, base[:2], bare, arm.home_key, CAMERA_NAME, rng)
     fixtures = {}
     for name in cfg.workpieces if cfg.fixtures else ():
         x, y, yaw = spots[f"{name}_fixture"]
-        fixtures[name] = _pose([x, y, cfg.table_height], _yaw(yaw))
-        body = spec.worldbody.add_body(name=f"{name}_fixture", pos=[x, y, cfg.table_height], quat=_quat(_yaw(yaw)))
+        R = yaw_matrix(yaw)
+        fixtures[name] = _pose([x, y, cfg.table_height], R)
+        body = spec.worldbody.add_body(name=f"{name}_fixture", pos=[x, y, cfg.table_height], quat=_quat(R))
         _add_boxes(spec, body, f"{name}_fixture", _fixture_walls(bounds[name], cfg), "fixture")
     for name in cfg.workpieces:
         x, y, yaw = spots[name]
         pos = [x, y, cfg.table_height + cfg.drop_height]
-        _add_workpiece(spec, catalog[name], index[name]["files"], meshes[name], pos, _quat(_yaw(yaw)))
+        _add_workpiece(spec, catalog[name], index[name]["files"], meshes[name], pos, _quat(yaw_matrix(yaw)))
     schedule, occluder_geoms = None, ()
     if cfg.occluder:  # drawn last: the layout above does not depend on it
         data = mujoco.MjData(bare)

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 import sim.episode as episode
-from sim.occluder import ReachingHuman, ReachSchedule, occlusion_at
+from sim.human import ReachingHuman
+from sim.occluder import ReachSchedule, occlusion_at
 from sim.perception import Look, Perception
 from sim.world import WorldConfig, build_world
 
