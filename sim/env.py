@@ -119,7 +119,8 @@ class PickPlaceEnv(gym.Env):
         super().reset(seed=seed)
         self._free()
         self.world = build_world(self.config, self.np_random)
-        self.episode = Episode(self.world, self.np_random, self.poses, self.occluder)
+        self.episode = Episode(self.world, self.np_random, self.poses, self.occluder,
+                               rgb=self.render_mode == "rgb_array")
         self._done, self._steps, self._looks = set(), 0, 0
         self._take_look()
         return self._observation(), self._info()
@@ -166,7 +167,7 @@ class PickPlaceEnv(gym.Env):
             return None
         if self._look is None:
             raise ResetNeededError("call reset() before render()")
-        if self._look.frame is not None:
+        if self._look.frame is not None and self._look.frame.rgb is not None:
             return self._look.frame.rgb.copy()
         if self._renderer is None:
             ensure_headless_gl()

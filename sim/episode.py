@@ -74,12 +74,13 @@ class Episode:
         poses: ``"recognized"`` (PSORR on the Kinect's cloud) or ``"oracle"`` (true poses).
         occluder: the human reaches over the table on a seeded timeline; the robot watches for it.
         recorder: gets every physics step and each look (see :mod:`sim.record`), or None.
+        rgb: looks also render the colour image; default: only when there is a recorder to show it.
 
     Call :meth:`close` when done (or use it as a context manager): it frees the renderers.
     """
 
     def __init__(self, world: World, rng: np.random.Generator, poses: str = "recognized", occluder: bool = False,
-                 recorder: Recorder | None = None):
+                 recorder: Recorder | None = None, rgb: bool | None = None):
         if poses not in POSE_MODES:
             raise InvalidInputError(f"poses must be one of {POSE_MODES}, got {poses!r}")
         if occluder and not world.occluder_geoms:
@@ -93,7 +94,8 @@ class Episode:
                                   eye=world.T_world_camera[:3, 3])
         self.human = human
         needs_eyes = poses == "recognized" or occluder
-        self.perception = Perception(world, rng, recognize=poses == "recognized") if needs_eyes else None
+        rgb = recorder is not None if rgb is None else rgb
+        self.perception = Perception(world, rng, recognize=poses == "recognized", rgb=rgb) if needs_eyes else None
         self.cell = ArmCell(world, human=human, monitor=self.perception if occluder else None, recorder=recorder)
         self.remaining = list(world.workpieces)
         self.picks: list[PickResult] = []

@@ -61,12 +61,13 @@ class Perception:
         world: the cell.
         rng: the sensor noise's randomness (the monitor draws its own from it).
         recognize: run PSORR on each look (False: looks only check occupancy).
+        rgb: render the colour image with each look (for a recorder or a viewer; PSORR needs depth only).
 
     Call :meth:`close` (or use it as a context manager) to free the renderers.
     """
 
-    def __init__(self, world: World, rng: np.random.Generator, recognize: bool = True):
-        self.world, self.rng = world, rng
+    def __init__(self, world: World, rng: np.random.Generator, recognize: bool = True, rgb: bool = True):
+        self.world, self.rng, self.rgb = world, rng, rgb
         self.camera = DepthCamera(world.model, world.camera_name)
         self._monitor = mujoco.Renderer(world.model, MONITOR_CAMERA.height, MONITOR_CAMERA.width)
         self._recognizer = _recognizer(world) if recognize else None
@@ -92,7 +93,7 @@ class Perception:
         top up to the ceiling, less the robot's own pixels. Cropped points become NaN, so the
         cloud stays organised.
         """
-        frame = self.camera.render(data, self.rng, KINECT_V1)
+        frame = self.camera.render(data, self.rng, KINECT_V1, rgb=self.rgb)
         pts = frame.cloud.points
         T = frame.T_world_camera
         world_pts = pts @ T[:3, :3].T + T[:3, 3]  # NaN rows stay NaN

@@ -82,7 +82,7 @@ class SensorFrame:
         cloud: organised PointCloud of H*W points (row-major, index v * W + u) in the camera's
             OpenCV frame, metres; NaN where there is no return. ``colors`` from ``rgb`` in [0, 1],
             ``labels`` the body id each point lies on (-1 where there is no return).
-        rgb: (H, W, 3) uint8 colour image (noise-free), read-only.
+        rgb: (H, W, 3) uint8 colour image (noise-free), read-only; None when rendered without colour.
         depth: (H, W) float64 z-depth in metres, 0 where there is no return (noisy if noise was
             given), read-only.
         segmentation: (H, W) int64 id of the body whose geom each pixel sees, -1 for none;
@@ -92,14 +92,15 @@ class SensorFrame:
     """
 
     cloud: PointCloud
-    rgb: np.ndarray
+    rgb: np.ndarray | None
     depth: np.ndarray
     segmentation: np.ndarray
     T_world_camera: np.ndarray
 
     def __post_init__(self):
         for name in ("rgb", "depth", "segmentation", "T_world_camera"):
-            getattr(self, name).setflags(write=False)
+            if getattr(self, name) is not None:
+                getattr(self, name).setflags(write=False)
 
 
 class DepthCamera:
@@ -138,7 +139,8 @@ class DepthCamera:
         self._far = 0.99 * model.vis.map.zfar * model.stat.extent
 
     def render(
-        self, data: mujoco.MjData, rng: np.random.Generator | None = None, noise: KinectNoise | None = None
+        self, data: mujoco.MjData, rng: np.random.Generator | None = None, noise: KinectNoise | None = None,
+        rgb: bool = True,
     ) -> SensorFrame:
         """Render the camera's view of ``data`` (kinematics must be current).
 
@@ -146,6 +148,8 @@ class DepthCamera:
             data: the state to render.
             rng: the noise's only randomness; needed when ``noise`` is given.
             noise: the Kinect noise model to apply to the depth, or None for exact depth.
+            rgb: also render the colour image (the dearest of the three passes on a CPU); without it
+                the frame's ``rgb`` and the cloud's colours are None.
         """
         if noise is not None and not isinstance(rng, np.random.Generator):
             raise InvalidInputError("render with noise needs rng, a numpy.random.Generator")
@@ -153,7 +157,7 @@ class DepthCamera:
         r.disable_depth_rendering()
         r.disable_segmentation_rendering()
         r.update_scene(data, camera=self._camera_id)
-        rgb = r.render().copy()
+        image = r.render().copy() if rgb else None
         r.enable_depth_rendering()
         depth = r.render().astype(np.float64)
         r.enable_segmentation_rendering()
@@ -163,14 +167,14 @@ class DepthCamera:
         is_geom = seg[..., 1] == int(mujoco.mjtObj.mjOBJ_GEOM)  # int: an enum compares per element in Python
         body = np.where(is_geom, self.model.geom_bodyid[np.where(is_geom, seg[..., 0], 0)], -1).astype(np.int64)
         depth = np.where((body >= 0) & (depth < self._far), depth, 0.0)
-        colors = rgb.reshape(-1, 3)
+        colors = image.reshape(-1, 3) if image is not None else None
         if noise is not None:
             depth, source = kinect_noise_with_source(depth, self.intrinsics, rng, noise)
             body = body.ravel()[source].reshape(body.shape)
-            colors = colors[source.ravel()]
-        cloud = depth_to_cloud(depth, self.intrinsics, colors=colors / 255.0, labels=body)
+            colors = colors[source.ravel()] if colors is not None else None
+        cloud = depth_to_cloud(depth, self.intrinsics, colors=None if colors is None else colors / 255.0, labels=body)
         T = T_world_camera_opencv(self.model, data, self._camera_id)
-        return SensorFrame(cloud=cloud, rgb=rgb, depth=depth, segmentation=body, T_world_camera=T)
+        return SensorFrame(cloud=cloud, rgb=image, depth=depth, segmentation=body, T_world_camera=T)
 
     def close(self) -> None:
         """Free the renderer's GL context; the camera cannot render afterwards."""
