@@ -10,7 +10,7 @@ of the human's capsules, posed where they are at the time of the solve.
 from __future__ import annotations
 
 import math
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import mujoco
 import numpy as np
@@ -19,6 +19,10 @@ from psorr.errors import PsorrError
 from sim.human import ReachingHuman
 from sim.ik import ArmIK, T_world_site, UnreachableTargetError
 from sim.world import World
+
+if TYPE_CHECKING:  # perception.py imports this module's users; only the annotations need these
+    from psorr.library import ModelLibrary
+    from sim.perception import Look
 
 RAMP_S = 0.8  # s a move's joint-space ramp lasts
 SETTLE_S = 0.3  # s held at the goal after each move
@@ -45,11 +49,11 @@ class Recorder(Protocol):
     def tick(self, world: World, data: mujoco.MjData) -> None:
         """After every physics step (the recorder decides which to keep)."""
 
-    def looked(self, world: World, data: mujoco.MjData, look, library) -> None:
-        """After each look: a :class:`sim.perception.Look` and the model library (None for the oracle)."""
+    def looked(self, world: World, data: mujoco.MjData, look: Look, library: ModelLibrary | None) -> None:
+        """After each look, with the model library (None for the oracle)."""
 
     def grasped(self, world: World, data: mujoco.MjData, part: str) -> None:
-        """When the gripper has closed on ``part``."""
+        """When the gripper has closed on ``part`` (before the lift tells whether the grasp holds)."""
 
 
 class ArmCell:
