@@ -186,8 +186,15 @@ def refine_icp(view: SceneView, model_points, model_normals, T_cloud_model, max_
     target.estimate_normals(o3d.geometry.KDTreeSearchParamHybrid(radius=3 * view.icp_voxel, max_nn=12))
     target.orient_normals_towards_camera_location(np.zeros(3))
     source = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(pts[visible]))
-    result = o3d.pipelines.registration.registration_icp(
-        source, target, max_distance, np.eye(4),
-        o3d.pipelines.registration.TransformationEstimationPointToPlane(),
-        o3d.pipelines.registration.ICPConvergenceCriteria(max_iteration=iterations))
+    # Open3D sums ICP's normal equations across threads in whatever order they finish, so the last
+    # bits of the pose, and everything a seeded episode does after it, would change from run to run.
+    threads = o3d.utility.get_max_threads()
+    o3d.utility.set_max_threads(1)
+    try:
+        result = o3d.pipelines.registration.registration_icp(
+            source, target, max_distance, np.eye(4),
+            o3d.pipelines.registration.TransformationEstimationPointToPlane(),
+            o3d.pipelines.registration.ICPConvergenceCriteria(max_iteration=iterations))
+    finally:
+        o3d.utility.set_max_threads(threads)
     return np.asarray(result.transformation) @ T_cloud_model
