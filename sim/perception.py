@@ -24,13 +24,12 @@ from psorr.camera import CameraIntrinsics
 from psorr.kinect_noise import KINECT_V1
 from psorr.types import Detection, PointCloud
 from sim.ik import T_world_site
-from sim.sensor import DepthCamera, SensorFrame
+from sim.sensor import DepthCamera, SensorFrame, T_world_camera_opencv, depth_and_bodies
 from sim.world import World
 
 CEILING_MARGIN = 0.03  # m above the tallest resting part before a point counts as an intrusion
 INTRUSION_FRACTION = 0.001  # of the image's pixels: fewer intruding points than this are noise
 WORKSPACE_BELOW = 0.03  # m below the table top the workspace crop starts (the table's own points stay in)
-KINECT_V1_FX = 525.0  # px: the disparity quantisation follows the full-resolution sensor's focal length
 MONITOR_CAMERA = CameraIntrinsics(width=160, height=120, fx=131.25, fy=131.25, cx=79.5, cy=59.5)
 """The monitor's depth stream: the Kinect's field of view at a quarter of its resolution."""
 
@@ -77,7 +76,6 @@ class Perception:
         heights = [world.catalog[p].bounds()[1, 2] for p in world.workpieces]
         self.ceiling = world.table_top + max(heights) + CEILING_MARGIN
         self._monitor_rays = MONITOR_CAMERA.pixel_rays().reshape(-1, 3)
-        self._far = 0.99 * model.vis.map.zfar * model.stat.extent
 
     @property
     def library(self):
@@ -126,20 +124,13 @@ class Perception:
         jitter, edge dropouts, the shadow band) are below a pixel at this resolution and are left out:
         the full model costs more than the render, and the monitor runs four times a second.
         """
-        r = self._monitor
-        r.enable_depth_rendering()  # enabling segmentation below switched depth off
-        r.update_scene(data, camera=self.world.camera_name)
-        depth = r.render().astype(np.float64)
-        r.enable_segmentation_rendering()
-        seg = r.render()
-        r.disable_segmentation_rendering()
-        is_geom = seg[..., 1] == int(mujoco.mjtObj.mjOBJ_GEOM)
-        body = np.where(is_geom, self.world.model.geom_bodyid[np.where(is_geom, seg[..., 0], 0)], -1)
-        depth = np.where((body >= 0) & (depth < self._far) & ~np.isin(body, self._arm_bodies), depth, 0.0)
-        depth = depth.ravel()
+        self._monitor.update_scene(data, camera=self.world.camera_name)
+        depth, body = depth_and_bodies(self._monitor, self.world.model)
+        depth = np.where(np.isin(body, self._arm_bodies), 0.0, depth).ravel()
         keep = depth > 0
-        depth[keep] += self.rng.normal(size=int(keep.sum())) * KINECT_V1.depth_sigma(depth[keep], KINECT_V1_FX)
-        T = _camera_pose(self.world, data)
+        # depth_sigma's disparity step is the full-resolution sensor's, which the monitor's image is binned from.
+        depth[keep] += self.rng.normal(size=int(keep.sum())) * KINECT_V1.depth_sigma(depth[keep])
+        T = T_world_camera_opencv(self.world.model, data, self.world.camera_name)
         pts = (self._monitor_rays[keep] * depth[keep, None]) @ T[:3, :3].T + T[:3, 3]
         return self._count_intruding(pts, data, holding) >= INTRUSION_FRACTION * depth.size
 
@@ -176,12 +167,6 @@ def _descends(model: mujoco.MjModel, body: int, root: int) -> bool:
             return True
         body = int(model.body_parentid[body])
     return False
-
-
-def _camera_pose(world: World, data: mujoco.MjData) -> np.ndarray:
-    from sim.sensor import T_world_camera_opencv
-
-    return T_world_camera_opencv(world.model, data, world.camera_name)
 
 
 _RECOGNIZERS: dict[tuple, object] = {}

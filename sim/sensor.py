@@ -74,6 +74,21 @@ def check_intrinsics(intrinsics: CameraIntrinsics) -> None:
         )
 
 
+def depth_and_bodies(renderer: mujoco.Renderer, model: mujoco.MjModel) -> tuple[np.ndarray, np.ndarray]:
+    """Render the scene already set by ``renderer.update_scene``: (H, W) z-depth in metres (0 where
+    no geom is hit, or only the far plane) and the (H, W) int64 id of the body each pixel sees (-1 for
+    none). Leaves the renderer's depth and segmentation modes off."""
+    renderer.enable_depth_rendering()
+    depth = renderer.render().astype(np.float64)
+    renderer.enable_segmentation_rendering()  # switches depth off
+    seg = renderer.render()
+    renderer.disable_segmentation_rendering()
+    is_geom = seg[..., 1] == int(mujoco.mjtObj.mjOBJ_GEOM)  # int: an enum compares per element in Python
+    body = np.where(is_geom, model.geom_bodyid[np.where(is_geom, seg[..., 0], 0)], -1).astype(np.int64)
+    far = 0.99 * model.vis.map.zfar * model.stat.extent
+    return np.where((body >= 0) & (depth < far), depth, 0.0), body
+
+
 @dataclass(frozen=True, eq=False)
 class SensorFrame:
     """One simulated Kinect frame.
@@ -136,7 +151,6 @@ class DepthCamera:
             )
         ensure_headless_gl()
         self._renderer = mujoco.Renderer(model, intrinsics.height, intrinsics.width)
-        self._far = 0.99 * model.vis.map.zfar * model.stat.extent
 
     def render(
         self, data: mujoco.MjData, rng: np.random.Generator | None = None, noise: KinectNoise | None = None,
@@ -158,15 +172,7 @@ class DepthCamera:
         r.disable_segmentation_rendering()
         r.update_scene(data, camera=self._camera_id)
         image = r.render().copy() if rgb else None
-        r.enable_depth_rendering()
-        depth = r.render().astype(np.float64)
-        r.enable_segmentation_rendering()
-        seg = r.render()
-        r.disable_segmentation_rendering()
-
-        is_geom = seg[..., 1] == int(mujoco.mjtObj.mjOBJ_GEOM)  # int: an enum compares per element in Python
-        body = np.where(is_geom, self.model.geom_bodyid[np.where(is_geom, seg[..., 0], 0)], -1).astype(np.int64)
-        depth = np.where((body >= 0) & (depth < self._far), depth, 0.0)
+        depth, body = depth_and_bodies(r, self.model)
         colors = image.reshape(-1, 3) if image is not None else None
         if noise is not None:
             depth, source = kinect_noise_with_source(depth, self.intrinsics, rng, noise)
