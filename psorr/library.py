@@ -26,7 +26,7 @@ from psorr.io import read_mesh
 from psorr.ppf import HashParams, PairTable
 from psorr.types import OrientedBox, PointCloud, Primitive, PrimitiveKind, PrimitiveShapeGraph
 
-FORMAT_VERSION = 2
+FORMAT_VERSION = 3  # 3: models keep their mesh, for render-and-compare checks
 MESH_SUFFIXES = (".stl", ".obj", ".ply")
 UNITS = {"m": 1.0, "mm": 0.001}
 
@@ -66,7 +66,8 @@ class Model:
     Attributes:
         name: the mesh file stem; points, normals: (S, 3) even surface samples;
         graph: the model's primitive shape graph (inliers index `points`);
-        diameter: largest distance between two samples; mesh_sha256: of the mesh bytes.
+        diameter: largest distance between two samples; mesh_sha256: of the mesh bytes;
+        vertices (V, 3) and faces (F, 3): the mesh itself, to render the model's depth at a pose.
     """
 
     name: str
@@ -75,6 +76,8 @@ class Model:
     graph: PrimitiveShapeGraph
     diameter: float
     mesh_sha256: str
+    vertices: np.ndarray
+    faces: np.ndarray
 
 
 def load_mesh_in_metres(path, units: str | None = None) -> trimesh.Trimesh:
@@ -100,7 +103,8 @@ def train_model(name: str, mesh: trimesh.Trimesh, params: TrainParams, sha: str 
     result = decompose(PointCloud(points, normals=normals), params.decompose, rng)
     hull = trimesh.convex.convex_hull(points[::max(1, len(points) // 4000)])
     diameter = float(np.max(np.linalg.norm(hull.vertices[:, None] - hull.vertices[None], axis=2)))
-    return Model(name, np.asarray(points), np.asarray(normals), result.graph, diameter, sha)
+    return Model(name, np.asarray(points), np.asarray(normals), result.graph, diameter, sha,
+                 np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces, dtype=np.int64))
 
 
 def spread_samples(points: np.ndarray, count: int, rng) -> np.ndarray:
@@ -230,6 +234,7 @@ def _save_models(path: Path, models: list[Model], params: TrainParams | None = N
     for i, m in enumerate(models):
         prims = m.graph.primitives
         arrays[f"m{i}_points"], arrays[f"m{i}_normals"] = m.points, m.normals
+        arrays[f"m{i}_vertices"], arrays[f"m{i}_faces"] = m.vertices, m.faces
         for j, p in enumerate(prims):
             arrays[f"m{i}_p{j}_inliers"] = p.inliers
         meta["models"].append({
@@ -260,7 +265,7 @@ def _load_models(path: Path) -> list[Model]:
                     for j, p in enumerate(m["primitives"]))
                 graph = PrimitiveShapeGraph(prims, tuple(tuple(e) for e in m["edges"]))
                 models.append(Model(m["name"], data[f"m{i}_points"], data[f"m{i}_normals"], graph,
-                                    float(m["diameter"]), m["sha256"]))
+                                    float(m["diameter"]), m["sha256"], data[f"m{i}_vertices"], data[f"m{i}_faces"]))
             return models
     except CloudFileError:
         raise
