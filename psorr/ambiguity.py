@@ -7,9 +7,11 @@ small features (a window, a gland hole, a row of holes) that only a dense point 
 
 :func:`near_symmetries` finds, per model, the half turns about its principal axes (through
 the centroid of its samples) that move its surface by little on average; exact symmetries
-qualify too, which is harmless. :func:`best_of_near_symmetries` re-fits each turned pose with
-ICP and keeps whichever explains the scene clearly best under a dense point check. When the
-features are hidden the two cannot be told apart, and the original pose is kept.
+qualify too, which is harmless. :func:`near_continuous_axis` finds an axis about which any turn
+is a near-symmetry (a flanged hub, whose yaw only its bolt holes fix). :class:`NearSymmetryResolver`
+re-fits each turned pose with ICP, or searches the turn about the axis, and keeps the pose whose
+rendered depth (:mod:`psorr.depth_compare`) agrees best with the measurement where the candidates
+differ. When the features are hidden the poses cannot be told apart, and the original is kept.
 """
 
 from __future__ import annotations
@@ -17,14 +19,18 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
+from psorr.depth_compare import DepthRenderer, residual_costs
+from psorr.types import PrimitiveKind
 from psorr.verify import CheckParams, PoseCheck, SceneView, check_pose, refine_icp
 
 NEAR_MEAN_DISTANCE = 0.03  # x model diameter: turns moving the surface less than this on average are near-symmetries
+EXACT_DISTANCE = 2e-4  # m: a turn moving no sample further than this from the mesh is an exact symmetry
+AXIS_TEST_DEGREES = (7.0, 19.0, 37.0, 90.0, 143.0)  # turns that must all be near-symmetries for a near-continuous axis
+AXIS_COARSE_DEG, AXIS_FINE_DEG = 4.0, 0.5
 DENSE_CHECK = CheckParams(max_points=6000)
-# A turned pose replaces the original only when it scores clearly better and contradicts the sensor
-# less. In seeded single-part scenes the true pose beats its turned twin by 0.02-0.03; in clutter,
-# where neighbours hide the end walls that tell them apart, the twin can win by 0.01 by chance.
-SWITCH_MARGIN = 0.02
+# A turned pose replaces the original only when its residual is clearly lower; when the features
+# that tell them apart are hidden the residuals tie, and recognition's own choice stands.
+SWITCH_RATIO = 0.9
 
 
 def near_symmetries(points: np.ndarray, diameter: float, limit: float = NEAR_MEAN_DISTANCE) -> np.ndarray:
@@ -50,17 +56,95 @@ def near_symmetries(points: np.ndarray, diameter: float, limit: float = NEAR_MEA
     return np.array(found).reshape(-1, 4, 4)
 
 
-def best_of_near_symmetries(view: SceneView, model, T_cloud_model: np.ndarray, turns: np.ndarray,
-                            icp_distance: float) -> tuple[np.ndarray, PoseCheck]:
-    """The pose among ``T_cloud_model`` and ``T_cloud_model @ S`` (each S in ``turns``, ICP-refined)
-    that explains the scene best under a dense point check, with that check; a turned pose must beat
-    the incumbent by ``SWITCH_MARGIN`` in score and have fewer violations."""
-    best_T = T_cloud_model
-    best = check_pose(view, model.points, model.normals, T_cloud_model, DENSE_CHECK)
-    for S in turns:
-        T = refine_icp(view, model.points, model.normals, T_cloud_model @ S, icp_distance)
-        T = refine_icp(view, model.points, model.normals, T, icp_distance / 3)
-        check = check_pose(view, model.points, model.normals, T, DENSE_CHECK)
-        if check.score > best.score + SWITCH_MARGIN and check.n_violation < best.n_violation:
-            best_T, best = T, check
-    return best_T, best
+def near_continuous_axis(model, renderer: DepthRenderer,
+                         limit: float = NEAR_MEAN_DISTANCE) -> tuple[np.ndarray, np.ndarray] | None:
+    """The axis (a point (3,) on it, its direction (3,)) about which every test turn of ``model`` is a
+    near-symmetry (mean distance below ``limit`` x diameter) but not all are exact symmetries (a
+    turned sample lands more than ``EXACT_DISTANCE`` from the mesh), or None.
+
+    A flanged hub is such a part: turned by any angle it is the same hub except for its bolt holes.
+    A plain bushing is exactly symmetric, and no turn of it needs telling apart. The candidates are
+    the model's cylinder axes and its principal axes; a cylinder's axis is the sharper estimate
+    (principal axes of a squat part are barely determined), and the best-fitting candidate wins.
+    """
+    points = model.points
+    centroid = points.mean(axis=0)
+    _, axes = np.linalg.eigh(np.cov((points - centroid).T))
+    candidates = [(p.axis_point, p.axis) for p in model.graph.primitives if p.kind is PrimitiveKind.CYLINDER]
+    candidates += [(centroid, axis) for axis in axes.T]
+    subset = points[:: max(1, len(points) // 3000)]
+    best, best_mean = None, np.inf
+    for point, axis in candidates:
+        distance = np.array([renderer.distance((subset - point) @ _turn(axis, np.radians(a)).T + point)
+                             for a in AXIS_TEST_DEGREES])
+        if (np.all(distance.mean(axis=1) < limit * model.diameter) and distance.max() > EXACT_DISTANCE
+                and distance.mean() < best_mean):
+            best, best_mean = (np.asarray(point, float), np.asarray(axis, float)), distance.mean()
+    return best
+
+
+def _turn(axis: np.ndarray, angle: float) -> np.ndarray:
+    """(3, 3) rotation by ``angle`` radians about the unit ``axis``."""
+    K = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    return np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K
+
+
+class NearSymmetryResolver:
+    """Chooses between a model's near-symmetric poses in a scene by render and compare.
+
+    Built once per model: its near-symmetric half turns (:func:`near_symmetries`) and its axis of
+    near-continuous symmetry (:func:`near_continuous_axis`), if any. :meth:`resolve` takes a refined
+    detection and returns the pose, among those the model cannot tell apart by its larger surfaces,
+    whose rendered depth agrees best with the measurement where the candidates differ.
+    """
+
+    def __init__(self, model):
+        self.model = model
+        self.renderer = DepthRenderer(model.vertices, model.faces)
+        self.turns = near_symmetries(model.points, model.diameter)
+        self.axis = near_continuous_axis(model, self.renderer)
+        self._centre = model.points.mean(axis=0)
+
+    def resolve(self, view: SceneView, T_cloud_model: np.ndarray, icp_distance: float) -> tuple[np.ndarray, PoseCheck]:
+        """The best pose (4, 4) and its dense :class:`PoseCheck`."""
+        T = T_cloud_model
+        if self.axis is not None:
+            T = self._best_turn_about_axis(view, T)
+        if len(self.turns):
+            T = self._best_half_turn(view, T, icp_distance)
+        m = self.model
+        return T, check_pose(view, m.points, m.normals, T, DENSE_CHECK)
+
+    def _costs(self, view: SceneView, poses: np.ndarray) -> np.ndarray:
+        centre = poses[0, :3, :3] @ self._centre + poses[0, :3, 3]
+        return residual_costs(view, self.renderer, poses, centre, 0.5 * self.model.diameter)
+
+    def _about_axis(self, T: np.ndarray, degrees: np.ndarray) -> np.ndarray:
+        point, axis = self.axis
+        poses = np.repeat(T[None], len(degrees), axis=0)
+        for k, a in enumerate(degrees):
+            S = np.eye(4)
+            S[:3, :3] = _turn(axis, np.radians(a))
+            S[:3, 3] = point - S[:3, :3] @ point
+            poses[k] = T @ S
+        return poses
+
+    def _best_turn_about_axis(self, view: SceneView, T: np.ndarray) -> np.ndarray:
+        # Coarse to fine: a whole turn in AXIS_COARSE_DEG steps, then AXIS_FINE_DEG steps around the best.
+        coarse = np.arange(0.0, 360.0, AXIS_COARSE_DEG)
+        best = coarse[int(np.argmin(self._costs(view, self._about_axis(T, coarse))))]
+        fine = np.concatenate([[0.0], best + np.arange(-AXIS_COARSE_DEG, AXIS_COARSE_DEG + 1e-9, AXIS_FINE_DEG)])
+        poses = self._about_axis(T, fine)
+        return poses[int(np.argmin(self._costs(view, poses)))]
+
+    def _best_half_turn(self, view: SceneView, T: np.ndarray, icp_distance: float) -> np.ndarray:
+        m = self.model
+        poses = [T]
+        for S in self.turns:
+            turned = refine_icp(view, m.points, m.normals, T @ S, icp_distance)
+            poses.append(refine_icp(view, m.points, m.normals, turned, icp_distance / 3))
+        poses = np.array(poses)
+        costs = self._costs(view, poses)
+        k = int(np.argmin(costs))
+        # Ties (the features that tell the poses apart are hidden) keep the pose recognition found.
+        return poses[k] if costs[k] < SWITCH_RATIO * costs[0] else T

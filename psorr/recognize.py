@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from psorr.ambiguity import best_of_near_symmetries, near_symmetries
+from psorr.ambiguity import NearSymmetryResolver
 from psorr.box_overlap import boxes_to_arrays, intersection_ratio, overlap_candidates
 from psorr.decomposition import DecomposeParams, decompose
 from psorr.errors import InvalidInputError
@@ -178,7 +178,7 @@ class Recognizer:
         self.library, self.method, self.params = library, method, params or RecognizeParams()
         self.max_diameter = max(m.diameter for m in library.models)
         self.model_centres = np.array([m.points.mean(axis=0) for m in library.models])  # (M, 3), model frames
-        self.near_symmetries = {m.name: near_symmetries(m.points, m.diameter) for m in library.models}
+        self.resolvers = {m.name: NearSymmetryResolver(m) for m in library.models}
 
     def recognize(self, cloud: PointCloud, rng: np.random.Generator | None = None) -> Recognition:
         if not isinstance(cloud, PointCloud):
@@ -243,6 +243,6 @@ class Recognizer:
             claimed[blocks] = True
             # Only now, on the few survivors, is a dense check affordable: it tells a part from its
             # near-symmetric twin pose (a tray turned end for end) by the small features.
-            T, check = best_of_near_symmetries(view, model, T, self.near_symmetries[model.name], p.icp_distance)
+            T, check = self.resolvers[model.name].resolve(view, T, p.icp_distance)
             detections.append(Detection(model.name, T, check.score, check.visible_fraction))
         return detections

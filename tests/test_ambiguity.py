@@ -1,9 +1,10 @@
-"""Near-symmetries (psorr/ambiguity.py): the chassis turned end for end is told from the chassis."""
+"""Near-symmetries (psorr/ambiguity.py): the chassis turned end for end is told from the chassis, and
+the flanged hub's yaw is found from its bolt holes."""
 
 import numpy as np
 import pytest
 
-from psorr.ambiguity import best_of_near_symmetries, near_symmetries
+from psorr.ambiguity import NearSymmetryResolver, near_symmetries
 from psorr.library import ModelLibrary
 from psorr.scenes import workpiece_scene
 from psorr.verify import SceneView
@@ -16,7 +17,7 @@ def parts(tmp_path_factory):
 
     os.environ["PSORR_CACHE"] = str(tmp_path_factory.mktemp("cache"))
     catalog = load_catalog()
-    names = ["bracket", "chassis"]
+    names = ["bracket", "bushing", "chassis", "flanged_hub"]
     library = ModelLibrary.from_meshes([catalog[n].mesh_path for n in names])
     return catalog, library, {n: catalog[n].load_mesh() for n in names}
 
@@ -40,10 +41,42 @@ def test_the_true_pose_wins_over_its_near_symmetric_twin(parts, seed):
     _, library, meshes = parts
     scene = workpiece_scene(np.random.default_rng(seed), meshes, ["chassis"])
     chassis = library.model("chassis")
-    turn = near_symmetries(chassis.points, chassis.diameter)
+    resolver = NearSymmetryResolver(chassis)
     T_true = scene.instances[0].T_camera_model
-    T, check = best_of_near_symmetries(SceneView(scene.cloud), chassis, T_true @ turn[0], turn, 0.01)
+    T, check = resolver.resolve(SceneView(scene.cloud), T_true @ resolver.turns[0], 0.01)
     assert np.linalg.norm(T[:3, 3] - T_true[:3, 3]) < 0.005
     R = T[:3, :3].T @ T_true[:3, :3]
     assert np.degrees(np.arccos(np.clip((np.trace(R) - 1) / 2, -1, 1))) < 3.0
     assert 0 < check.score <= 1
+
+
+def _angle_deg(R: np.ndarray) -> float:
+    return float(np.degrees(np.arccos(np.clip((np.trace(R) - 1) / 2, -1, 1))))
+
+
+def test_only_the_hub_has_an_axis_to_search(parts):
+    """The hub is the same hub turned by any angle but for its bolt holes; the bushing is exactly
+    round (nothing to tell apart), and the chassis and the bracket change when turned."""
+    _, library, _ = parts
+    axes = {m.name: NearSymmetryResolver(m).axis for m in library.models}
+    assert axes["bushing"] is None and axes["chassis"] is None and axes["bracket"] is None
+    point, direction = axes["flanged_hub"]
+    assert abs(direction[2]) > 0.999  # the hub's axis is its model z
+    assert np.linalg.norm(point[:2]) < 1e-3
+
+
+@pytest.mark.parametrize("seed, degrees", [(0, 20.0), (1, -12.0), (2, 7.0)])
+def test_the_hubs_yaw_is_found_from_its_bolt_holes(parts, seed, degrees):
+    """Start from the true pose turned about the hub's axis: render and compare turns it back to
+    within 2 degrees, modulo the bolt pattern's 60."""
+    catalog, library, meshes = parts
+    scene = workpiece_scene(np.random.default_rng(seed), meshes, ["flanged_hub"])
+    hub = library.model("flanged_hub")
+    resolver = NearSymmetryResolver(hub)
+    T_true = scene.instances[0].T_camera_model
+    a = np.radians(degrees)
+    turn = np.eye(4)
+    turn[:2, :2] = [[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]]
+    T, _ = resolver.resolve(SceneView(scene.cloud), T_true @ turn, 0.01)
+    errors = [_angle_deg(T[:3, :3].T @ (T_true @ S)[:3, :3]) for S in catalog["flanged_hub"].symmetries]
+    assert min(errors) < 2.0
