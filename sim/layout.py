@@ -15,8 +15,8 @@ import numpy as np
 from psorr.errors import PsorrError
 from sim.sensor import T_world_camera_opencv
 
-if TYPE_CHECKING:  # world.py imports this module
-    from sim.world import WorldConfig
+if TYPE_CHECKING:
+    from sim.world_config import WorldConfig
 
 
 class WorldBuildError(PsorrError):
