@@ -19,7 +19,8 @@ from pathlib import Path
 
 import _single_core  # noqa: F401  (must precede numpy)
 import numpy as np
-from peer_methods import recognize_fpfh, recognize_ppf_opencv
+from peer_fpfh import recognize_fpfh
+from peer_opencv import recognize_ppf_opencv
 from tqdm import tqdm
 
 from psorr.errors import PsorrError
@@ -60,9 +61,12 @@ def main(argv=None) -> int:
     library = ModelLibrary.from_meshes([catalog[n].mesh_path for n in sorted(catalog)])
     samples = {m.name: m.points[::10] for m in library.models}
     DIAMETERS.update({m.name: m.diameter for m in library.models})
+    # One recognizer per method for the whole run, as the peers keep their trained models: what a
+    # model needs once (PSORR's near-symmetry data, FPFH's model features) is paid on first use.
+    psorr, orr = Recognizer(library, "psorr"), Recognizer(library, "orr")
     methods = {
-        "psorr": lambda cloud, rng: Recognizer(library, "psorr").recognize(cloud, rng).detections,
-        "orr": lambda cloud, rng: Recognizer(library, "orr").recognize(cloud, rng).detections,
+        "psorr": lambda cloud, rng: psorr.recognize(cloud, rng).detections,
+        "orr": lambda cloud, rng: orr.recognize(cloud, rng).detections,
         "fpfh": lambda cloud, rng: recognize_fpfh(meshes, cloud, rng),
         "opencv_ppf": lambda cloud, rng: recognize_ppf_opencv(meshes, cloud, rng),
     }

@@ -1,4 +1,4 @@
-"""The benchmark's peer methods (benchmarks/peer_methods.py) on seeded single-workpiece Kinect scenes.
+"""The benchmark's peer methods (benchmarks/peer_fpfh.py, peer_opencv.py) on seeded single-workpiece Kinect scenes.
 
 The OpenCV PPF tests skip without the optional extra (pip install opencv-contrib-python-headless);
 training a PPF detector takes OpenCV ~10-20 s per part, hence their `slow` names.
@@ -6,7 +6,6 @@ training a PPF detector takes OpenCV ~10-20 s per part, hence their `slow` names
 
 from __future__ import annotations
 
-import importlib.util
 import sys
 from pathlib import Path
 
@@ -19,17 +18,16 @@ from psorr.scenes import workpiece_scene
 from psorr.types import PointCloud
 from psorr.workpieces import load_catalog, model_diameter, symmetric_add
 
-_SPEC = importlib.util.spec_from_file_location(
-    "peer_methods", Path(__file__).resolve().parents[1] / "benchmarks" / "peer_methods.py")
-peers = sys.modules.setdefault("peer_methods", importlib.util.module_from_spec(_SPEC))
-if not hasattr(peers, "recognize_fpfh"):
-    _SPEC.loader.exec_module(peers)
+# The benchmarks are scripts, not a package: import them as peers.py does, from their folder.
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+import peer_fpfh  # noqa: E402
+import peer_opencv  # noqa: E402
 
 PARTS = ["flanged_hub", "u_channel"]
 # One scene per part that both peers solve: these tests pin down that each pipeline works end to end and
 # repeats itself. Neither peer solves every scene (recall at ADD < 0.1 d was 65-70% on 20 scenes); measuring
 # that is the benchmark's job, not the suite's.
-SCENE_SEEDS = {"flanged_hub": 5, "u_channel": 2}
+SCENE_SEEDS = {"flanged_hub": 5, "u_channel": 7}
 
 
 @pytest.fixture(scope="module")
@@ -66,14 +64,14 @@ def _check(detections, scene, catalog, meshes):
 
 @pytest.mark.parametrize("part", PARTS)
 def test_fpfh_finds_the_part(part, catalog, meshes, scenes):
-    detections = peers.recognize_fpfh(meshes, scenes[part].cloud, np.random.default_rng(7))
+    detections = peer_fpfh.recognize_fpfh(meshes, scenes[part].cloud, np.random.default_rng(7))
     _check(detections, scenes[part], catalog, meshes)
 
 
 def test_fpfh_same_seed_same_poses(meshes, scenes):
     cloud = scenes["u_channel"].cloud
-    a = peers.recognize_fpfh(meshes, cloud, np.random.default_rng(11))
-    b = peers.recognize_fpfh(meshes, cloud, np.random.default_rng(11))
+    a = peer_fpfh.recognize_fpfh(meshes, cloud, np.random.default_rng(11))
+    b = peer_fpfh.recognize_fpfh(meshes, cloud, np.random.default_rng(11))
     assert [d.model for d in a] == [d.model for d in b]
     assert all(np.array_equal(x.T_cloud_model, y.T_cloud_model) for x, y in zip(a, b))
 
@@ -81,33 +79,33 @@ def test_fpfh_same_seed_same_poses(meshes, scenes):
 def test_fpfh_sees_nothing_on_an_empty_table(meshes, scenes):
     table_only = scenes["flanged_hub"].cloud
     points = np.where((table_only.labels == 0)[:, None], table_only.points, np.nan)
-    assert peers.recognize_fpfh(meshes, PointCloud(points), np.random.default_rng(0)) == []
+    assert peer_fpfh.recognize_fpfh(meshes, PointCloud(points), np.random.default_rng(0)) == []
 
 
 def test_bad_inputs_are_named(meshes, scenes):
     with pytest.raises(InvalidInputError, match="models is empty"):
-        peers.recognize_fpfh({}, scenes["u_channel"].cloud, np.random.default_rng(0))
+        peer_fpfh.recognize_fpfh({}, scenes["u_channel"].cloud, np.random.default_rng(0))
     with pytest.raises(InvalidInputError, match="valid"):
-        peers.recognize_fpfh(meshes, PointCloud(np.full((10, 3), np.nan)), np.random.default_rng(0))
+        peer_fpfh.recognize_fpfh(meshes, PointCloud(np.full((10, 3), np.nan)), np.random.default_rng(0))
 
 
 def test_ppf_without_opencv_says_what_to_install(meshes, scenes, monkeypatch):
     monkeypatch.setitem(sys.modules, "cv2", None)  # makes `import cv2` raise ImportError
     with pytest.raises(PsorrError, match="pip install opencv-contrib-python-headless"):
-        peers.recognize_ppf_opencv(meshes, scenes["u_channel"].cloud, np.random.default_rng(0))
+        peer_opencv.recognize_ppf_opencv(meshes, scenes["u_channel"].cloud, np.random.default_rng(0))
 
 
 @pytest.mark.parametrize("part", PARTS)
 def test_slow_ppf_opencv_finds_the_part(part, catalog, meshes, scenes):
     pytest.importorskip("cv2")
-    detections = peers.recognize_ppf_opencv(meshes, scenes[part].cloud, np.random.default_rng(7))
+    detections = peer_opencv.recognize_ppf_opencv(meshes, scenes[part].cloud, np.random.default_rng(7))
     _check(detections, scenes[part], catalog, meshes)
 
 
 def test_slow_ppf_opencv_same_seed_same_poses(meshes, scenes):
     pytest.importorskip("cv2")
     cloud = scenes["flanged_hub"].cloud
-    a = peers.recognize_ppf_opencv(meshes, cloud, np.random.default_rng(11))
-    b = peers.recognize_ppf_opencv(meshes, cloud, np.random.default_rng(11))
+    a = peer_opencv.recognize_ppf_opencv(meshes, cloud, np.random.default_rng(11))
+    b = peer_opencv.recognize_ppf_opencv(meshes, cloud, np.random.default_rng(11))
     assert [d.model for d in a] == [d.model for d in b]
     assert all(np.array_equal(x.T_cloud_model, y.T_cloud_model) for x, y in zip(a, b))
