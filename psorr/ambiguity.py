@@ -72,14 +72,19 @@ def near_continuous_axis(model, renderer: DepthRenderer,
     _, axes = np.linalg.eigh(np.cov((points - centroid).T))
     candidates = [(p.axis_point, p.axis) for p in model.graph.primitives if p.kind is PrimitiveKind.CYLINDER]
     candidates += [(centroid, axis) for axis in axes.T]
-    subset = points[:: max(1, len(points) // 3000)]
+    subset = points[:: max(1, len(points) // 1500)]
     best, best_mean = None, np.inf
     for point, axis in candidates:
-        distance = np.array([renderer.distance((subset - point) @ _turn(axis, np.radians(a)).T + point)
-                             for a in AXIS_TEST_DEGREES])
-        if (np.all(distance.mean(axis=1) < limit * model.diameter) and distance.max() > EXACT_DISTANCE
-                and distance.mean() < best_mean):
-            best, best_mean = (np.asarray(point, float), np.asarray(axis, float)), distance.mean()
+        means, largest = [], 0.0
+        for a in AXIS_TEST_DEGREES:  # most candidates fail the first turn or two
+            distance = renderer.distance((subset - point) @ _turn(axis, np.radians(a)).T + point)
+            means.append(distance.mean())
+            largest = max(largest, float(distance.max()))
+            if means[-1] >= limit * model.diameter:
+                break
+        else:
+            if largest > EXACT_DISTANCE and np.mean(means) < best_mean:
+                best, best_mean = (np.asarray(point, float), np.asarray(axis, float)), float(np.mean(means))
     return best
 
 

@@ -178,7 +178,7 @@ class Recognizer:
         self.library, self.method, self.params = library, method, params or RecognizeParams()
         self.max_diameter = max(m.diameter for m in library.models)
         self.model_centres = np.array([m.points.mean(axis=0) for m in library.models])  # (M, 3), model frames
-        self.resolvers = {m.name: NearSymmetryResolver(m) for m in library.models}
+        self._resolvers: dict[str, NearSymmetryResolver] = {}  # built on a model's first detection
 
     def recognize(self, cloud: PointCloud, rng: np.random.Generator | None = None) -> Recognition:
         if not isinstance(cloud, PointCloud):
@@ -222,6 +222,11 @@ class Recognizer:
         order = _share_out(order[scores[order] >= p.min_box_score], models, p.refine_top)
         return [(models[k], poses[k]) for k in order], len(poses), verify_ms, decomposition_ms
 
+    def _resolver(self, model) -> NearSymmetryResolver:
+        if model.name not in self._resolvers:
+            self._resolvers[model.name] = NearSymmetryResolver(model)
+        return self._resolvers[model.name]
+
     def _accept(self, view, candidates) -> list[Detection]:
         p = self.params
         scored = []
@@ -243,6 +248,6 @@ class Recognizer:
             claimed[blocks] = True
             # Only now, on the few survivors, is a dense check affordable: it tells a part from its
             # near-symmetric twin pose (a tray turned end for end) by the small features.
-            T, check = self.resolvers[model.name].resolve(view, T, p.icp_distance)
+            T, check = self._resolver(model).resolve(view, T, p.icp_distance)
             detections.append(Detection(model.name, T, check.score, check.visible_fraction))
         return detections
