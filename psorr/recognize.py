@@ -25,6 +25,7 @@ from psorr.decomposition import DecomposeParams, decompose
 from psorr.errors import InvalidInputError
 from psorr.library import ModelLibrary
 from psorr.orr import orr_hypotheses
+from psorr.single_plane import SinglePlaneMatcher, SinglePlaneParams
 from psorr.types import Detection, OrientedBox, PointCloud, PrimitiveKind
 from psorr.verify import CheckParams, SceneView, check_pose, refine_icp
 
@@ -48,6 +49,7 @@ class RecognizeParams:
     max_violation_ratio: float = 0.15
     min_support: int = 60
     max_shared_pixels: float = 0.3      # a detection sharing more of its pixels with a better one is dropped
+    single_plane: SinglePlaneParams = field(default_factory=SinglePlaneParams)  # PSORR: poses from one face
 
     def __post_init__(self):
         for name in ("max_hypotheses", "refine_top", "orr_hypotheses", "min_support"):
@@ -179,6 +181,7 @@ class Recognizer:
         self.max_diameter = max(m.diameter for m in library.models)
         self.model_centres = np.array([m.points.mean(axis=0) for m in library.models])  # (M, 3), model frames
         self._resolvers: dict[str, NearSymmetryResolver] = {}  # built on a model's first detection
+        self._single_plane = SinglePlaneMatcher(library.models, self.params.single_plane)
 
     def recognize(self, cloud: PointCloud, rng: np.random.Generator | None = None) -> Recognition:
         if not isinstance(cloud, PointCloud):
@@ -187,11 +190,22 @@ class Recognizer:
         start = time.perf_counter()
         view = SceneView(cloud)
         if self.method == "psorr":
-            candidates, n_hyp, verify_ms, decomposition_ms = self._psorr(cloud, view, rng)
+            candidates, n_hyp, verify_ms, decomposition_ms, scene_prims = self._psorr(cloud, view, rng)
         else:
             candidates, n_hyp, verify_ms = orr_hypotheses(self, cloud, view, rng)
             decomposition_ms = 0.0
-        detections = self._accept(view, candidates)
+        detections, claimed = self._accept(view, candidates)
+        if self.method == "psorr" and self.params.single_plane.enabled:
+            # A part showing one face gives no pair; its face, matched by size, still gives a pose.
+            # Only faces no detection explains are tried, so these few poses do not crowd out the pairs'.
+            t1 = time.perf_counter()
+            unexplained = [q for q, pts in scene_prims if q.kind is PrimitiveKind.PLANE
+                           and not _explained(view, claimed, pts)]
+            face_poses, face_models = self._single_plane.hypotheses(unexplained)
+            face_candidates = self._best_face_poses(view, face_poses, face_models)
+            n_hyp, verify_ms = n_hyp + len(face_poses), verify_ms + (time.perf_counter() - t1) * 1e3
+            more, claimed = self._accept(view, face_candidates, claimed)
+            detections += more
         total = (time.perf_counter() - start) * 1e3
         stats = RecognitionStats(self.method, n_hyp, verify_ms / max(n_hyp, 1), decomposition_ms, total,
                                  self.library.train_ms)
@@ -203,31 +217,42 @@ class Recognizer:
         scene = decompose(cloud, p.decompose, rng)
         decomposition_ms = (time.perf_counter() - t0) * 1e3
         pts, nrm, used = _scene_oriented_points(scene.primitives, 1.2 * self.max_diameter)
-        if len(pts) < 2:
-            return [], 0, 0.0, decomposition_ms
-        i, j = np.nonzero(np.linalg.norm(pts[:, None] - pts[None], axis=2) <= self.max_diameter)
-        keep = i != j
-        i, j = i[keep], j[keep]
-        scene_index, rows = self.library.table.lookup(pts[i], nrm[i], pts[j], nrm[j])
-        if len(rows) == 0:
-            return [], 0, 0.0, decomposition_ms
-        poses, models = self.library.table.poses(scene_index, rows, pts[i], nrm[i], pts[j])
-        poses, models = _cluster(poses, models, self.model_centres, self.library, p.cluster_cell, p.max_hypotheses)
         scene_prims = [scene.primitives[k] for k in used]
+        poses, models = np.empty((0, 4, 4)), np.empty(0, dtype=np.int64)
+        if len(pts) >= 2:  # pairs need two oriented points
+            i, j = np.nonzero(np.linalg.norm(pts[:, None] - pts[None], axis=2) <= self.max_diameter)
+            keep = i != j
+            scene_index, rows = self.library.table.lookup(pts[i[keep]], nrm[i[keep]], pts[j[keep]], nrm[j[keep]])
+            if len(rows):
+                poses, models = self.library.table.poses(scene_index, rows, pts[i[keep]], nrm[i[keep]], pts[j[keep]])
+                poses, models = _cluster(poses, models, self.model_centres, self.library, p.cluster_cell,
+                                         p.max_hypotheses)
         t1 = time.perf_counter()
         scores = np.array([_box_score(self.library.models[m], T, scene_prims, p.box_thickness)
                            for T, m in zip(poses, models)])
-        verify_ms = (time.perf_counter() - t1) * 1e3
         order = np.argsort(-scores, kind="stable")
         order = _share_out(order[scores[order] >= p.min_box_score], models, p.refine_top)
-        return [(models[k], poses[k]) for k in order], len(poses), verify_ms, decomposition_ms
+        verify_ms = (time.perf_counter() - t1) * 1e3
+        planes = [(scene.primitives[k], cloud.points[scene.labels == k]) for k in used]
+        return [(models[k], poses[k]) for k in order], len(poses), verify_ms, decomposition_ms, planes
+
+    def _best_face_poses(self, view, poses, models) -> list[tuple[int, np.ndarray]]:
+        # Boxes cannot rank these (one face covers little of a model's boxes); a coarse point check can.
+        sp = self.params.single_plane
+        scores = np.array([check_pose(view, self.library.models[m].points, self.library.models[m].normals, T,
+                                      sp.check).score for T, m in zip(poses, models)])
+        order = np.argsort(-scores, kind="stable")
+        order = _share_out(order[scores[order] >= sp.min_score], models, sp.top)
+        return [(models[k], poses[k]) for k in order]
 
     def _resolver(self, model) -> NearSymmetryResolver:
         if model.name not in self._resolvers:
             self._resolvers[model.name] = NearSymmetryResolver(model)
         return self._resolvers[model.name]
 
-    def _accept(self, view, candidates) -> list[Detection]:
+    def _accept(self, view, candidates, claimed: np.ndarray | None = None) -> tuple[list[Detection], np.ndarray]:
+        """Detections among ``candidates`` (model index, pose), and the 4x4-pixel blocks claimed so far
+        (``claimed``: by earlier detections, which a new one may share only up to max_shared_pixels)."""
         p = self.params
         scored = []
         for model_index, T in candidates:
@@ -239,7 +264,8 @@ class Recognizer:
                     and check.violation_ratio <= p.max_violation_ratio):
                 scored.append((check.score, model, T, check))
         scored.sort(key=lambda s: -s[0])
-        claimed = np.zeros((view.width // 4 + 1) * (view.height // 4 + 1), dtype=bool)
+        if claimed is None:
+            claimed = np.zeros((view.width // 4 + 1) * (view.height // 4 + 1), dtype=bool)
         detections = []
         for _, model, T, check in scored:
             blocks = check.supported_blocks
@@ -250,4 +276,14 @@ class Recognizer:
             # near-symmetric twin pose (a tray turned end for end) by the small features.
             T, check = self._resolver(model).resolve(view, T, p.icp_distance)
             detections.append(Detection(model.name, T, check.score, check.visible_fraction))
-        return detections
+        return detections, claimed
+
+
+def _explained(view: SceneView, claimed: np.ndarray, points: np.ndarray, share: float = 0.5) -> bool:
+    """Do accepted detections claim at least ``share`` of the 4x4-pixel blocks ``points`` (M, 3) fall in?"""
+    points = points[:: max(1, len(points) // 200)]
+    u, v, inside = view.project(points)
+    if not inside.any():
+        return False
+    blocks = (v[inside] // 4) * (view.width // 4 + 1) + u[inside] // 4
+    return bool(claimed[blocks].mean() >= share)

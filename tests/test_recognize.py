@@ -18,7 +18,7 @@ import pytest
 from psorr.errors import InvalidInputError
 from psorr.io import write_cloud
 from psorr.library import ModelLibrary
-from psorr.recognize import Recognizer
+from psorr.recognize import RecognizeParams, Recognizer
 from psorr.scenes import workpiece_scene
 from psorr.workpieces import DEFAULT_CATALOG, load_catalog, symmetric_add
 
@@ -65,7 +65,8 @@ def test_single_part_recall_floor(library, catalog):
             found, false, total = found + f, false + fp, total + 1
             for det in result.detections:
                 assert 0 < det.score <= 1 and 0 < det.visible_fraction <= 1
-            assert result.stats.hypotheses <= 100
+            params = RecognizeParams()  # pair clusters, plus poses from single faces when pairs leave some unexplained
+            assert result.stats.hypotheses <= params.max_hypotheses + params.single_plane.max_poses
     assert found / total >= 0.45, f"single-part recall {found}/{total}"
     assert false <= 2, f"{false} false positives in {total} single-part scenes"
 
