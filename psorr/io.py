@@ -27,16 +27,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from psorr.errors import CloudFileError, InvalidInputError
-from psorr.pcd import (
-    Field,
-    cloud_from_fields,
-    decode_ascii,
-    decode_binary,
-    decode_pcd,
-    encode_pcd,
-    encode_records,
-    load_table,
-)
+from psorr.pcd import decode_pcd, encode_pcd
+from psorr.records import Field, cloud_from_fields, decode_ascii, decode_binary, encode_records, load_table
 from psorr.types import PointCloud
 
 if TYPE_CHECKING:
