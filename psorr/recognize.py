@@ -190,7 +190,7 @@ class Recognizer:
         start = time.perf_counter()
         view = SceneView(cloud)
         if self.method == "psorr":
-            candidates, n_hyp, verify_ms, decomposition_ms, scene_prims = self._psorr(cloud, view, rng)
+            candidates, n_hyp, verify_ms, decomposition_ms, scene, faces = self._psorr(cloud, view, rng)
         else:
             candidates, n_hyp, verify_ms = orr_hypotheses(self, cloud, view, rng)
             decomposition_ms = 0.0
@@ -199,8 +199,8 @@ class Recognizer:
             # A part showing one face gives no pair; its face, matched by size, still gives a pose.
             # Only faces no detection explains are tried, so these few poses do not crowd out the pairs'.
             t1 = time.perf_counter()
-            unexplained = [q for q, pts in scene_prims if q.kind is PrimitiveKind.PLANE
-                           and not _explained(view, claimed, pts)]
+            unexplained = [scene.primitives[k] for k in faces
+                           if not _explained(view, claimed, cloud.points[scene.labels == k])]
             face_poses, face_models = self._single_plane.hypotheses(unexplained)
             face_candidates = self._best_face_poses(view, face_poses, face_models)
             n_hyp, verify_ms = n_hyp + len(face_poses), verify_ms + (time.perf_counter() - t1) * 1e3
@@ -222,9 +222,10 @@ class Recognizer:
         if len(pts) >= 2:  # pairs need two oriented points
             i, j = np.nonzero(np.linalg.norm(pts[:, None] - pts[None], axis=2) <= self.max_diameter)
             keep = i != j
-            scene_index, rows = self.library.table.lookup(pts[i[keep]], nrm[i[keep]], pts[j[keep]], nrm[j[keep]])
+            i, j = i[keep], j[keep]
+            scene_index, rows = self.library.table.lookup(pts[i], nrm[i], pts[j], nrm[j])
             if len(rows):
-                poses, models = self.library.table.poses(scene_index, rows, pts[i[keep]], nrm[i[keep]], pts[j[keep]])
+                poses, models = self.library.table.poses(scene_index, rows, pts[i], nrm[i], pts[j])
                 poses, models = _cluster(poses, models, self.model_centres, self.library, p.cluster_cell,
                                          p.max_hypotheses)
         t1 = time.perf_counter()
@@ -233,8 +234,8 @@ class Recognizer:
         order = np.argsort(-scores, kind="stable")
         order = _share_out(order[scores[order] >= p.min_box_score], models, p.refine_top)
         verify_ms = (time.perf_counter() - t1) * 1e3
-        planes = [(scene.primitives[k], cloud.points[scene.labels == k]) for k in used]
-        return [(models[k], poses[k]) for k in order], len(poses), verify_ms, decomposition_ms, planes
+        faces = [k for k in used if scene.primitives[k].kind is PrimitiveKind.PLANE]  # for poses from one face
+        return [(models[k], poses[k]) for k in order], len(poses), verify_ms, decomposition_ms, scene, faces
 
     def _best_face_poses(self, view, poses, models) -> list[tuple[int, np.ndarray]]:
         # Boxes cannot rank these (one face covers little of a model's boxes); a coarse point check can.
@@ -265,7 +266,7 @@ class Recognizer:
                 scored.append((check.score, model, T, check))
         scored.sort(key=lambda s: -s[0])
         if claimed is None:
-            claimed = np.zeros((view.width // 4 + 1) * (view.height // 4 + 1), dtype=bool)
+            claimed = np.zeros(view.n_blocks, dtype=bool)
         detections = []
         for _, model, T, check in scored:
             blocks = check.supported_blocks
@@ -280,10 +281,9 @@ class Recognizer:
 
 
 def _explained(view: SceneView, claimed: np.ndarray, points: np.ndarray, share: float = 0.5) -> bool:
-    """Do accepted detections claim at least ``share`` of the 4x4-pixel blocks ``points`` (M, 3) fall in?"""
+    """Do accepted detections claim at least ``share`` of the pixel blocks ``points`` (M, 3) fall in?"""
     points = points[:: max(1, len(points) // 200)]
     u, v, inside = view.project(points)
     if not inside.any():
         return False
-    blocks = (v[inside] // 4) * (view.width // 4 + 1) + u[inside] // 4
-    return bool(claimed[blocks].mean() >= share)
+    return bool(claimed[view.block_of(u[inside], v[inside])].mean() >= share)

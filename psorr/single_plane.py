@@ -50,18 +50,24 @@ class SinglePlaneParams:
     square_ratio: float = 0.8
 
 
+def _in_plane_axes(plane: Primitive) -> list[tuple[float, np.ndarray]]:
+    """(side length, box axis) of the plane's box axes that lie in its plane, longest first."""
+    R, extent, normal = plane.box.rotation, plane.box.extent, plane.normal
+    return [(float(extent[k]), R[:, k]) for k in np.argsort(-extent, kind="stable")
+            if abs(R[:, k] @ normal) < _IN_PLANE_COS]
+
+
 def in_plane_sides(plane: Primitive) -> np.ndarray:
     """(2,) the plane's box sides in its plane, longest first (metres)."""
-    R, extent, normal = plane.box.rotation, plane.box.extent, plane.normal
-    sides = sorted((extent[k] for k in range(3) if abs(R[:, k] @ normal) < _IN_PLANE_COS), reverse=True)
+    sides = [side for side, _ in _in_plane_axes(plane)]
     return np.array((sides + [0.0, 0.0])[:2])
 
 
 def plane_frames(plane: Primitive, quarter_turns: bool) -> np.ndarray:
     """(2 or 4, 4, 4) frames at the plane's box centre: z along its normal, x along its box's long
     in-plane side (either way; and along the short side too with ``quarter_turns``)."""
-    R, extent, n = plane.box.rotation, plane.box.extent, plane.normal
-    in_plane = [R[:, k] for k in np.argsort(-extent) if abs(R[:, k] @ n) < _IN_PLANE_COS]
+    n = plane.normal
+    in_plane = [axis for _, axis in _in_plane_axes(plane)]
     long_side = in_plane[0] if in_plane else np.cross(n, [1.0, 0.0, 0.0] if abs(n[0]) < 0.9 else [0.0, 1.0, 0.0])
     x = long_side - (long_side @ n) * n
     x /= np.linalg.norm(x)

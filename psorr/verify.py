@@ -115,6 +115,15 @@ class SceneView:
         self.object_tree = o3d.geometry.KDTreeFlann(objects) if len(objects.points) else None
         self.icp_voxel = icp_voxel
 
+    @property
+    def n_blocks(self) -> int:
+        """How many _SELF_BLOCK x _SELF_BLOCK pixel blocks the buffer has (the size of a claim mask)."""
+        return (self.width // _SELF_BLOCK + 1) * (self.height // _SELF_BLOCK + 1)
+
+    def block_of(self, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """Flat index of the pixel block each pixel (u, v) falls in."""
+        return (v // _SELF_BLOCK) * (self.width // _SELF_BLOCK + 1) + u // _SELF_BLOCK
+
     def project(self, points: np.ndarray):
         """Pixel (u, v) of (N, 3) points and an in-bounds mask (N,)."""
         z = np.maximum(points[:, 2], 1e-9)
@@ -130,7 +139,7 @@ def visible_model_points(view: SceneView, points: np.ndarray, normals: np.ndarra
     facing = np.flatnonzero(np.einsum("ij,ij->i", normals, -points) > 0)
     u, v, inside = view.project(points[facing])
     facing, u, v = facing[inside], u[inside], v[inside]
-    block = (v // _SELF_BLOCK) * (view.width // _SELF_BLOCK + 1) + u // _SELF_BLOCK
+    block = view.block_of(u, v)
     nearest = np.full(block.max() + 1 if len(block) else 1, np.inf)
     np.minimum.at(nearest, block, points[facing, 2])
     tol = depth_tolerance(points[facing, 2], CheckParams())
@@ -162,7 +171,7 @@ def check_pose(view: SceneView, model_points, model_normals, T_cloud_model, para
         n_violation += int(below.sum() * len(visible) / len(pts))
     # Blocks, not pixels: two poses of one instance check different samples of
     # its points, so only coarse cells tell that they explain the same surface.
-    blocks = (v // _SELF_BLOCK) * (view.width // _SELF_BLOCK + 1) + u // _SELF_BLOCK
+    blocks = view.block_of(u, v)
     return PoseCheck(len(visible), int(support.sum()), n_violation, int(occluded.sum()), np.unique(blocks[support]))
 
 
