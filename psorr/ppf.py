@@ -64,6 +64,7 @@ class HashParams:
 
     angle_step_deg: float = 12.0
     distance_tolerance: float = 0.008
+    nearest_neighbour_bins: bool = True  # lookups also probe the adjacent bin nearer each angle
 
     def __post_init__(self):
         if not 0 < self.angle_step_deg <= 90 or self.distance_tolerance <= 0:
@@ -76,7 +77,29 @@ class HashParams:
     def keys(self, angles: np.ndarray) -> np.ndarray:
         """(M,) int64 cell keys of (M, 3) angle triples."""
         bins = np.minimum((np.degrees(angles) / self.angle_step_deg).astype(np.int64), self.n_bins - 1)
-        return (bins[:, 0] * self.n_bins + bins[:, 1]) * self.n_bins + bins[:, 2]
+        return self._key(bins)
+
+    def _key(self, bins: np.ndarray) -> np.ndarray:
+        return (bins[..., 0] * self.n_bins + bins[..., 1]) * self.n_bins + bins[..., 2]
+
+    def probe_keys(self, angles: np.ndarray) -> np.ndarray:
+        """(M, C) keys a scene pair is looked up under: its own cell, and with nearest_neighbour_bins
+        every combination with the neighbouring bin nearer each angle (C = 8). A scene centroid is
+        seldom where a model sample was drawn, so its angles land a few degrees off the model pair's,
+        and across a bin border as often as not."""
+        position = np.degrees(angles) / self.angle_step_deg
+        bins = np.minimum(position.astype(np.int64), self.n_bins - 1)
+        if not self.nearest_neighbour_bins:
+            return self._key(bins)[:, None]
+        step = np.where(position - bins < 0.5, -1, 1)
+        neighbour = np.clip(bins + step, 0, self.n_bins - 1)
+        corners = np.array([[(c >> a) & 1 for a in range(3)] for c in range(8)], bool)  # (8, 3)
+        probes = np.where(corners[None], neighbour[:, None, :], bins[:, None, :])  # (M, 8, 3)
+        keys = self._key(probes)
+        # A clipped neighbour repeats the own bin; repeated keys would return the same rows twice.
+        keys.sort(axis=1)
+        keys[:, 1:][keys[:, 1:] == keys[:, :-1]] = -1
+        return keys
 
 
 @dataclass(frozen=True, eq=False)
@@ -116,11 +139,12 @@ class PairTable:
         """Matches for M scene pairs: (scene pair index (K,), table row (K,)),
         rows in the same cell whose distance is within the tolerance."""
         angles, distances = pair_features(p1, n1, p2, n2)
-        keys = self.params.keys(angles)
+        probes = self.params.probe_keys(angles)
+        keys = probes.ravel()
         lo = np.searchsorted(self.keys, keys, side="left")
-        hi = np.searchsorted(self.keys, keys, side="right")
+        hi = np.where(keys >= 0, np.searchsorted(self.keys, keys, side="right"), lo)
         counts = hi - lo
-        scene = np.repeat(np.arange(len(keys)), counts)
+        scene = np.repeat(np.arange(len(keys)) // probes.shape[1], counts)
         rows = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts) + np.repeat(lo, counts)
         close = np.abs(self.distances[rows] - distances[scene]) < self.params.distance_tolerance
         return scene[close], rows[close]

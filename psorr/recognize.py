@@ -4,9 +4,10 @@ Both methods share the model library, the acceptance stage (point-to-plane
 ICP, the point-level check, and suppression of detections that explain the
 same pixels) and the stats. They differ in where hypotheses come from and
 how each is screened:
-- PSORR pairs plane centroids and cylinder axes of the decomposed scene,
-  clusters the poses by vote, and screens each by intersecting model and
-  scene primitive boxes (section 2.1.4).
+- PSORR pairs plane centroids and cylinder axes of the decomposed scene
+  (its leftover points decomposed again, finer), clusters the poses by
+  vote, and screens each by intersecting model and scene primitive boxes
+  (section 2.1.4).
 - ORR (Papazov and Burschka) pairs random oriented scene points and screens
   every hypothesis with the point-level check.
 """
@@ -17,14 +18,15 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from psorr.ambiguity import NearSymmetryResolver
 from psorr.box_overlap import boxes_to_arrays, intersection_ratio, overlap_candidates
 from psorr.decomposition import DecomposeParams, decompose
+from psorr.decomposition.detail import decompose_leftovers
 from psorr.errors import InvalidInputError
 from psorr.library import ModelLibrary
 from psorr.orr import orr_hypotheses
+from psorr.pose_clusters import densest_poses
 from psorr.single_plane import SinglePlaneMatcher, SinglePlaneParams
 from psorr.types import Detection, OrientedBox, PointCloud, PrimitiveKind
 from psorr.verify import CheckParams, SceneView, check_pose, refine_icp
@@ -37,6 +39,7 @@ class RecognizeParams:
     """Settings of recognition; distances in metres."""
 
     decompose: DecomposeParams = field(default_factory=lambda: DecomposeParams(voxel_size=0.008))
+    leftover_voxel: float | None = 0.005  # PSORR: points the decomposition left unlabelled, again at this voxel
     max_hypotheses: int = 100           # PSORR: clustered hypotheses screened by boxes
     cluster_cell: float = 0.02          # PSORR: position grid of the vote clustering
     min_box_score: float = 0.1
@@ -55,6 +58,9 @@ class RecognizeParams:
         for name in ("max_hypotheses", "refine_top", "orr_hypotheses", "min_support"):
             if int(getattr(self, name)) < 1:
                 raise InvalidInputError(f"RecognizeParams.{name} must be >= 1, got {getattr(self, name)}")
+        if self.leftover_voxel is not None and not self.leftover_voxel > 0:
+            raise InvalidInputError(f"RecognizeParams.leftover_voxel must be > 0 metres or None, "
+                                    f"got {self.leftover_voxel}")
         for name in ("cluster_cell", "box_thickness", "icp_distance"):
             if not getattr(self, name) > 0:
                 raise InvalidInputError(f"RecognizeParams.{name} must be > 0 metres, got {getattr(self, name)}")
@@ -94,25 +100,6 @@ def _scene_oriented_points(primitives, max_extent):
             nrm.append(p.axis)
         used.append(index)
     return np.array(pts).reshape(-1, 3), np.array(nrm).reshape(-1, 3), used
-
-
-def _cluster(poses, models, centres, library, cell, limit):
-    """Vote poses into (model, position cell, coarse rotation) bins. Each model
-    gets an equal share of the `limit` hypotheses, its fullest bins first (one
-    pose each): a model with many primitives collects more chance votes, and a
-    single shared ranking would crowd the others out."""
-    where = np.einsum("kij,kj->ki", poses[:, :3, :3], centres[models]) + poses[:, :3, 3]
-    quat = Rotation.from_matrix(poses[:, :3, :3]).as_quat()
-    quat *= np.where(quat[:, 3:] < 0, -1, 1)
-    keys = np.column_stack([models, np.floor(where / cell), np.round(quat * 4)]).astype(np.int64)
-    unique, first, votes = np.unique(keys, axis=0, return_index=True, return_counts=True)
-    quota = max(1, limit // len(library))
-    chosen = []
-    for model in np.unique(unique[:, 0]):
-        mine = np.flatnonzero(unique[:, 0] == model)
-        chosen.append(first[mine[np.argsort(-votes[mine], kind="stable")[:quota]]])
-    best = np.concatenate(chosen)
-    return poses[best], models[best]
 
 
 _COS_AGREE = np.cos(np.radians(20.0))
@@ -215,6 +202,8 @@ class Recognizer:
         p = self.params
         t0 = time.perf_counter()
         scene = decompose(cloud, p.decompose, rng)
+        if p.leftover_voxel is not None:
+            scene = decompose_leftovers(cloud, scene, p.leftover_voxel, p.decompose, rng)
         decomposition_ms = (time.perf_counter() - t0) * 1e3
         pts, nrm, used = _scene_oriented_points(scene.primitives, 1.2 * self.max_diameter)
         scene_prims = [scene.primitives[k] for k in used]
@@ -226,8 +215,7 @@ class Recognizer:
             scene_index, rows = self.library.table.lookup(pts[i], nrm[i], pts[j], nrm[j])
             if len(rows):
                 poses, models = self.library.table.poses(scene_index, rows, pts[i], nrm[i], pts[j])
-                poses, models = _cluster(poses, models, self.model_centres, self.library, p.cluster_cell,
-                                         p.max_hypotheses)
+                poses, models = densest_poses(poses, models, self.model_centres, p.cluster_cell, p.max_hypotheses)
         t1 = time.perf_counter()
         scores = np.array([_box_score(self.library.models[m], T, scene_prims, p.box_thickness)
                            for T, m in zip(poses, models)])

@@ -52,6 +52,20 @@ def normal_agreement(kind: PrimitiveKind, params, points, normals) -> np.ndarray
     return np.abs(np.einsum("ij,ij->i", surface_normals(kind, params, points), normals))
 
 
+def faces_outward(params, points: np.ndarray, normals: np.ndarray) -> np.ndarray:
+    """(N,) bool: does each oriented point's normal face away from the cylinder's axis?
+
+    True on an outer wall, False in a bore (normals face the sensor, or outwards
+    on a CAD part, so a bore's visible wall faces its axis). normal_agreement
+    ignores this sign, so a bush's wall and its bore, one coaxial radius apart,
+    can fall to one cylinder of the radius in between.
+    """
+    p = np.asarray(params, float)
+    rel = points - p[:3]
+    radial = rel - np.outer(rel @ p[3:6], p[3:6])
+    return np.einsum("ij,ij->i", radial, normals) > 0
+
+
 def support_counts(kind: PrimitiveKind, params: np.ndarray, points, normals, threshold, cos_max):
     """(C,) how many of the (N, 3) oriented points each of C shapes of one
     kind explains: within `threshold` ((N,) metres) and normals within the angle."""

@@ -43,7 +43,7 @@ class SinglePlaneParams:
     top: int = 6
     min_score: float = 0.2
     check: CheckParams = field(default_factory=lambda: CheckParams(max_points=400))
-    min_area: float = 1e-3
+    min_area: float = 4e-4
     min_side_ratio: float = 0.75
     max_side_ratio: float = 1.15
     slack: float = 0.005

@@ -1,11 +1,11 @@
 """Recognition on seeded ray-cast Kinect scenes of the catalog workpieces,
 scored by the symmetry-aware ADD (correct under 0.1 x the model diameter).
 
-The recall tests are floors that catch regressions, set below what PSORR
-reaches today (singles 8-9/16, clutter 14/32 on these seeds) and far below
-the issue's targets (0.95 and 0.85): parts that show fewer than two
-primitives to a Kinect at 0.75 m (bracket, bushing, the flat circuit board)
-give PSORR no pairs.
+The recall tests assert the issue's correctness bar: single parts are
+recognised (16/16 today on these seeds; one miss is allowed), and clutter
+recall is at least 0.8 with at most one false positive per scene (20/24 and
+none today). The benchmark's harder set, with an occluder, is in
+benchmarks/peers.py.
 """
 
 import json
@@ -53,9 +53,8 @@ def _score(scene, detections, library, catalog):
     return len(found), false
 
 
-def test_single_part_recall_floor(library, catalog):
-    # Two seeded scenes per catalog part. The floor guards against regressions;
-    # the issue's target (0.95) is not met yet.
+def test_single_parts_are_recognised(library, catalog):
+    # Two seeded scenes per catalog part, the flat circuit board and the small bushing included.
     found = false = total = 0
     for k, name in enumerate(sorted(catalog)):
         for s in range(2):
@@ -67,21 +66,21 @@ def test_single_part_recall_floor(library, catalog):
                 assert 0 < det.score <= 1 and 0 < det.visible_fraction <= 1
             params = RecognizeParams()  # pair clusters, plus poses from single faces when pairs leave some unexplained
             assert result.stats.hypotheses <= params.max_hypotheses + params.single_plane.max_poses
-    assert found / total >= 0.45, f"single-part recall {found}/{total}"
+    assert found >= total - 1, f"single-part recall {found}/{total}"
     assert false <= 2, f"{false} false positives in {total} single-part scenes"
 
 
-def test_clutter_recall_floor(library, catalog):
-    # Seeded 4-part scenes; the issue's target (0.85) is not met yet.
+def test_clutter_recall_and_false_positives(library, catalog):
+    # Seeded 4-part scenes without an occluder.
     names_all = sorted(catalog)
-    found = false = total = 0
+    found = total = 0
     for seed in range(6):
         names = list(np.random.default_rng(seed).choice(names_all, size=4, replace=False))
         scene = workpiece_scene(np.random.default_rng(1000 + seed), {n: catalog[n].load_mesh() for n in names}, names)
         f, fp = _score(scene, Recognizer(library).recognize(scene.cloud).detections, library, catalog)
-        found, false, total = found + f, false + fp, total + len(names)
-    assert found / total >= 0.35, f"clutter recall {found}/{total}"
-    assert false <= 6, f"{false} false positives in 6 clutter scenes"
+        found, total = found + f, total + len(names)
+        assert fp <= 1, f"{fp} false positives in the scene of seed {seed}"
+    assert found / total >= 0.8, f"clutter recall {found}/{total}"
 
 
 def test_empty_table_gives_no_detection(library, catalog):

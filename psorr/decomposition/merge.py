@@ -55,7 +55,7 @@ def _best_merge(pa: Piece, pb: Piece, vox, threshold, cos_max, n_points, k, max_
         if rough is None or support_mask(kind, rough, pts[screen], nrm[screen], thr[screen], cos_max).mean() < 0.7:
             continue
         params = shapes.fit(kind, pts, nrm, max_radius=max_radius)
-        if params is None:
+        if params is None or (kind is PrimitiveKind.CYLINDER and _wall_meets_bore(params, pa, pb, vox)):
             continue
         support = support_mask(kind, params, pts, nrm, thr, cos_max)
         # The geometric refinement only polishes a union that nearly fits;
@@ -70,6 +70,13 @@ def _best_merge(pa: Piece, pb: Piece, vox, threshold, cos_max, n_points, k, max_
         if best is None or gain > best[0]:
             best = (gain, Piece(kind, tuple(float(v) for v in params), union[support]))
     return best
+
+
+def _wall_meets_bore(params, pa: Piece, pb: Piece, vox) -> bool:
+    """Would the cylinder join an outer wall to a bore? Its |cos| normal test cannot tell them apart."""
+    a = shapes.faces_outward(params, vox.points[pa.members], vox.normals[pa.members]).mean()
+    b = shapes.faces_outward(params, vox.points[pb.members], vox.normals[pb.members]).mean()
+    return (a - 0.5) * (b - 0.5) < 0 and abs(a - b) > 0.5
 
 
 def merge_greedy(pieces, labels, vox, edges, threshold, cos_max, max_gap, k, max_radius=np.inf):

@@ -223,13 +223,32 @@ def _split_components(labels, hypotheses, vox, threshold, edges, params) -> dict
         if len(members) < params.min_points:
             continue
         hyp = hypotheses[labels[members[0]]]
-        best = best_fitting_kind(vox.points[members], vox.normals[members], threshold[members], params, hyp.kind)
-        kind, fitted = (best[0], best[1]) if best is not None else (hyp.kind, hyp.params)
-        piece_id = len(pieces)
-        pieces[piece_id] = Piece(kind, tuple(float(v) for v in fitted), members)
-        new_labels[members] = piece_id
+        for part in _wall_and_bore(hyp, members, vox, params.min_points):
+            best = best_fitting_kind(vox.points[part], vox.normals[part], threshold[part], params, hyp.kind)
+            kind, fitted = (best[0], best[1]) if best is not None else (hyp.kind, hyp.params)
+            piece_id = len(pieces)
+            pieces[piece_id] = Piece(kind, tuple(float(v) for v in fitted), part)
+            new_labels[part] = piece_id
     labels[:] = new_labels
     return pieces
+
+
+_MIN_BORE_SHARE = 0.15
+
+
+def _wall_and_bore(hyp, members, vox, min_points) -> list[np.ndarray]:
+    """A cylinder patch split into its outer-wall and bore points when it holds enough of both.
+
+    A cylinder of the radius between a bush's wall and its bore is within reach of both, so the
+    graph cut can give them one label; fitted together they give neither radius. A few flipped
+    normals along a silhouette are noise, not a bore, and stay where they are."""
+    if hyp.kind is not PrimitiveKind.CYLINDER:
+        return [members]
+    outward = shapes.faces_outward(hyp.params, vox.points[members], vox.normals[members])
+    minority = min(outward.sum(), (~outward).sum())
+    if minority < max(min_points, _MIN_BORE_SHARE * len(members)):
+        return [members]
+    return [members[outward], members[~outward]]
 
 
 _MAX_FIT_POINTS = 20_000
