@@ -175,7 +175,7 @@ class ModelLibrary:
     @classmethod
     def build(cls, models: list[Model], params: TrainParams, train_ms: float = 0.0) -> ModelLibrary:
         rng = np.random.default_rng(params.seed)
-        pts, nrm, owner, firsts, seconds, offset = [], [], [], [], [], 0
+        pts, nrm, owner, prims, firsts, seconds, offset = [], [], [], [], [], [], 0
         for index, model in enumerate(models):
             p, n, prim = _oriented_points(model, params, rng)
             a, b = np.meshgrid(np.arange(len(p)), np.arange(len(p)), indexing="ij")
@@ -185,9 +185,10 @@ class ModelLibrary:
             pts.append(p)
             nrm.append(n)
             owner.append(np.full(len(p), index))
+            prims.append(prim)
             offset += len(p)
         table = PairTable.build(params.hash, np.vstack(pts), np.vstack(nrm), np.concatenate(owner),
-                                np.concatenate(firsts), np.concatenate(seconds))
+                                np.concatenate(firsts), np.concatenate(seconds), np.concatenate(prims))
         return cls(models, table, params, train_ms)
 
     @classmethod

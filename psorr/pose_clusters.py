@@ -36,12 +36,13 @@ def _cell_keys(models: np.ndarray, cells: np.ndarray) -> np.ndarray:
     return key
 
 
-def densest_poses(poses: np.ndarray, models: np.ndarray, centres: np.ndarray, cell: float,
+def densest_poses(poses: np.ndarray, models: np.ndarray, voters: np.ndarray, centres: np.ndarray, cell: float,
                   limit: int) -> tuple[np.ndarray, np.ndarray]:
     """Up to ``limit`` poses, an equal share per model, best-supported first and one per cell.
 
     poses (K, 4, 4) T_cloud_model; models (K,) indices into centres (M, 3), each model's centre in
-    its own frame; cell in metres. An equal share, because a model with many primitives collects
+    its own frame; voters (K,) int, the scene pair each pose came from (a cell's support is the
+    number of distinct scene pairs in it); cell in metres. An equal share, because a model with many primitives collects
     more chance votes, and a single ranking would crowd the others out. A pose is taken only if
     neither of its cells gave a pose already, so each cluster yields one hypothesis.
     Returns the chosen poses and their models.
@@ -50,9 +51,13 @@ def densest_poses(poses: np.ndarray, models: np.ndarray, centres: np.ndarray, ce
         return poses, models
     coords = _coordinates(poses, centres[models], cell)
     cells, votes = [], []
+    voters = np.asarray(voters, dtype=np.int64)
     for shift in (0.0, 0.5):
-        _, cell_of, count = np.unique(_cell_keys(models, np.floor(coords + shift).astype(np.int64)),
-                                      return_inverse=True, return_counts=True)
+        _, cell_of = np.unique(_cell_keys(models, np.floor(coords + shift).astype(np.int64)), return_inverse=True)
+        # One vote per scene pair and cell: a pair of parallel faces matches hundreds of model pairs
+        # that all give nearly the same pose, and would outvote an instance that many pairs agree on.
+        ballots = np.unique(cell_of * (voters.max() + 1) + voters) // (voters.max() + 1)
+        count = np.bincount(ballots, minlength=cell_of.max() + 1)
         cells.append(cell_of)
         votes.append(count[cell_of])
     score = np.maximum(*votes)

@@ -112,23 +112,26 @@ class PairTable:
         keys: (E,) cell keys, sorted; distances: (E,) |d| in metres.
         first, second: (E,) indices into points of each stored pair.
         model: (P,) index of the model each oriented point belongs to.
+        primitive: (P,) index of the point's primitive within its model.
     """
 
     params: HashParams
     points: np.ndarray
     normals: np.ndarray
     model: np.ndarray
+    primitive: np.ndarray
     keys: np.ndarray
     distances: np.ndarray
     first: np.ndarray
     second: np.ndarray
 
     @classmethod
-    def build(cls, params: HashParams, points, normals, model, first, second) -> PairTable:
+    def build(cls, params: HashParams, points, normals, model, first, second, primitive=None) -> PairTable:
         angles, distances = pair_features(points[first], normals[first], points[second], normals[second])
         keys = params.keys(angles)
         order = np.argsort(keys, kind="stable")
-        return cls(params, points, normals, np.asarray(model, np.int32), keys[order],
+        primitive = np.zeros(len(points), np.int32) if primitive is None else np.asarray(primitive, np.int32)
+        return cls(params, points, normals, np.asarray(model, np.int32), primitive, keys[order],
                    distances[order].astype(np.float32), np.asarray(first, np.int32)[order],
                    np.asarray(second, np.int32)[order])
 

@@ -27,6 +27,7 @@ from psorr.errors import InvalidInputError
 from psorr.library import ModelLibrary
 from psorr.orr import orr_hypotheses
 from psorr.pose_clusters import densest_poses
+from psorr.primitive_match import PrimitiveSizes
 from psorr.single_plane import SinglePlaneMatcher, SinglePlaneParams
 from psorr.types import Detection, OrientedBox, PointCloud, PrimitiveKind
 from psorr.verify import CheckParams, SceneView, check_pose, refine_icp
@@ -102,6 +103,7 @@ def _scene_oriented_points(primitives, max_extent):
     return np.array(pts).reshape(-1, 3), np.array(nrm).reshape(-1, 3), used
 
 
+_COARSE = CheckParams(max_points=300)
 _COS_AGREE = np.cos(np.radians(20.0))
 
 
@@ -166,6 +168,7 @@ class Recognizer:
             raise InvalidInputError(f"unknown method {method!r}; choose one of {METHODS}")
         self.library, self.method, self.params = library, method, params or RecognizeParams()
         self.max_diameter = max(m.diameter for m in library.models)
+        self._sizes = PrimitiveSizes(library.models)
         self.model_centres = np.array([m.points.mean(axis=0) for m in library.models])  # (M, 3), model frames
         self._resolvers: dict[str, NearSymmetryResolver] = {}  # built on a model's first detection
         self._single_plane = SinglePlaneMatcher(library.models, self.params.single_plane)
@@ -213,9 +216,11 @@ class Recognizer:
             keep = i != j
             i, j = i[keep], j[keep]
             scene_index, rows = self.library.table.lookup(pts[i], nrm[i], pts[j], nrm[j])
+            scene_index, rows = self._plausible(scene_prims, i, j, scene_index, rows)
             if len(rows):
                 poses, models = self.library.table.poses(scene_index, rows, pts[i], nrm[i], pts[j])
-                poses, models = densest_poses(poses, models, self.model_centres, p.cluster_cell, p.max_hypotheses)
+                poses, models = densest_poses(poses, models, scene_index, self.model_centres, p.cluster_cell,
+                                              p.max_hypotheses)
         t1 = time.perf_counter()
         scores = np.array([_box_score(self.library.models[m], T, scene_prims, p.box_thickness)
                            for T, m in zip(poses, models)])
@@ -224,6 +229,15 @@ class Recognizer:
         verify_ms = (time.perf_counter() - t1) * 1e3
         faces = [k for k in used if scene.primitives[k].kind is PrimitiveKind.PLANE]  # for poses from one face
         return [(models[k], poses[k]) for k in order], len(poses), verify_ms, decomposition_ms, scene, faces
+
+    def _plausible(self, scene_prims, i, j, scene_index, rows):
+        """The lookup matches whose scene primitives could be parts of their model primitives (kind, size)."""
+        table, sizes = self.library.table, self._sizes
+        fits = sizes.compatible(scene_prims)
+        a, b = table.first[rows], table.second[rows]
+        owner = sizes.offsets[table.model[a]]
+        keep = fits[i[scene_index], owner + table.primitive[a]] & fits[j[scene_index], owner + table.primitive[b]]
+        return scene_index[keep], rows[keep]
 
     def _best_face_poses(self, view, poses, models) -> list[tuple[int, np.ndarray]]:
         # Boxes cannot rank these (one face covers little of a model's boxes); a coarse point check can.
@@ -246,7 +260,10 @@ class Recognizer:
         scored = []
         for model_index, T in candidates:
             model = self.library.models[model_index]
-            T = refine_icp(view, model.points, model.normals, T, p.icp_distance)
+            T = refine_icp(view, model.points, model.normals, T, p.icp_distance, max_points=1000)
+            # Most candidates are wrong, and one coarse ICP shows it: the fine pass is kept for the rest.
+            if check_pose(view, model.points, model.normals, T, _COARSE).visible_fraction < p.min_visible_fraction / 2:
+                continue
             T = refine_icp(view, model.points, model.normals, T, p.icp_distance / 3)
             check = check_pose(view, model.points, model.normals, T, p.check)
             if (check.n_support >= p.min_support and check.visible_fraction >= p.min_visible_fraction

@@ -84,5 +84,37 @@ def test_a_vote_cluster_straddling_a_cell_border_still_wins():
     scattered[:, :3, :3] = Rotation.random(50, random_state=1).as_matrix()
     scattered[:, :3, 3] = rng.uniform(-0.2, 0.2, (50, 3)) + (0, 0, 1.0)
     poses = np.concatenate([scattered, chance, good])
-    chosen, _ = densest_poses(poses, np.zeros(len(poses), dtype=np.int64), np.zeros((1, 3)), 0.02, 1)
+    voters = np.arange(len(poses))  # each pose from its own scene pair
+    chosen, _ = densest_poses(poses, np.zeros(len(poses), dtype=np.int64), voters, np.zeros((1, 3)), 0.02, 1)
     assert np.abs(chosen[0, :3, 3] - truth[:3, 3]).max() < 0.004
+
+
+def test_one_scene_pair_matching_many_model_pairs_is_one_vote():
+    truth = np.eye(4)
+    truth[:3, 3] = (0.0, 0.0, 0.8)
+    agreed = np.repeat(truth[None], 5, axis=0)  # five scene pairs agree on the instance
+    echo = np.repeat(np.eye(4)[None], 200, axis=0)  # one pair of parallel faces, matched 200 times
+    echo[:, :3, 3] = (0.2, 0.1, 0.9)
+    poses = np.concatenate([echo, agreed])
+    voters = np.concatenate([np.zeros(200, dtype=np.int64), np.arange(1, 6)])
+    chosen, _ = densest_poses(poses, np.zeros(len(poses), dtype=np.int64), voters, np.zeros((1, 3)), 0.02, 1)
+    assert np.allclose(chosen[0], truth)
+
+
+def test_a_cylinder_matches_only_its_own_radius_and_never_a_face():
+    from psorr.library import ModelLibrary
+    from psorr.primitive_match import PrimitiveSizes
+
+    catalog = load_catalog()
+    library = ModelLibrary.from_meshes([catalog["bushing"].mesh_path])
+    bushing = library.models[0]
+    sizes = PrimitiveSizes(library.models)
+    own = sizes.compatible(bushing.graph.primitives)  # every primitive could be itself
+    assert own[np.arange(len(own)), np.arange(len(own))].all()
+    outer = next(k for k, p in enumerate(bushing.graph.primitives)
+                 if p.kind is PrimitiveKind.CYLINDER and abs(p.radius - 0.015) < 1e-3)
+    bore = next(k for k, p in enumerate(bushing.graph.primitives)
+                if p.kind is PrimitiveKind.CYLINDER and abs(p.radius - 0.008) < 1e-3)
+    assert not own[outer, bore] and not own[bore, outer]
+    planes = [k for k, p in enumerate(bushing.graph.primitives) if p.kind is PrimitiveKind.PLANE]
+    assert not own[np.ix_(planes, [outer, bore])].any()  # a face is never a cylinder
