@@ -52,11 +52,12 @@ def densest_poses(poses: np.ndarray, models: np.ndarray, voters: np.ndarray, cen
     coords = _coordinates(poses, centres[models], cell)
     cells, votes = [], []
     voters = np.asarray(voters, dtype=np.int64)
+    n_voters = int(voters.max()) + 1
     for shift in (0.0, 0.5):
         _, cell_of = np.unique(_cell_keys(models, np.floor(coords + shift).astype(np.int64)), return_inverse=True)
         # One vote per scene pair and cell: a pair of parallel faces matches hundreds of model pairs
         # that all give nearly the same pose, and would outvote an instance that many pairs agree on.
-        ballots = np.unique(cell_of * (voters.max() + 1) + voters) // (voters.max() + 1)
+        ballots = np.unique(cell_of * n_voters + voters) // n_voters
         count = np.bincount(ballots, minlength=cell_of.max() + 1)
         cells.append(cell_of)
         votes.append(count[cell_of])
