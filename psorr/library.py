@@ -188,7 +188,7 @@ class ModelLibrary:
             prims.append(prim)
             offset += len(p)
         table = PairTable.build(params.hash, np.vstack(pts), np.vstack(nrm), np.concatenate(owner),
-                                np.concatenate(firsts), np.concatenate(seconds), np.concatenate(prims))
+                                np.concatenate(prims), np.concatenate(firsts), np.concatenate(seconds))
         return cls(models, table, params, train_ms)
 
     @classmethod

@@ -76,8 +76,12 @@ class HashParams:
 
     def keys(self, angles: np.ndarray) -> np.ndarray:
         """(M,) int64 cell keys of (M, 3) angle triples."""
-        bins = np.minimum((np.degrees(angles) / self.angle_step_deg).astype(np.int64), self.n_bins - 1)
-        return self._key(bins)
+        return self._key(self._bins(angles)[1])
+
+    def _bins(self, angles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(position in bins (M, 3) float, bin index (M, 3) int64) of angle triples."""
+        position = np.degrees(angles) / self.angle_step_deg
+        return position, np.minimum(position.astype(np.int64), self.n_bins - 1)
 
     def _key(self, bins: np.ndarray) -> np.ndarray:
         return (bins[..., 0] * self.n_bins + bins[..., 1]) * self.n_bins + bins[..., 2]
@@ -87,8 +91,7 @@ class HashParams:
         every combination with the neighbouring bin nearer each angle (C = 8). A scene centroid is
         seldom where a model sample was drawn, so its angles land a few degrees off the model pair's,
         and across a bin border as often as not."""
-        position = np.degrees(angles) / self.angle_step_deg
-        bins = np.minimum(position.astype(np.int64), self.n_bins - 1)
+        position, bins = self._bins(angles)
         if not self.nearest_neighbour_bins:
             return self._key(bins)[:, None]
         step = np.where(position - bins < 0.5, -1, 1)
@@ -126,12 +129,11 @@ class PairTable:
     second: np.ndarray
 
     @classmethod
-    def build(cls, params: HashParams, points, normals, model, first, second, primitive=None) -> PairTable:
+    def build(cls, params: HashParams, points, normals, model, primitive, first, second) -> PairTable:
         angles, distances = pair_features(points[first], normals[first], points[second], normals[second])
         keys = params.keys(angles)
         order = np.argsort(keys, kind="stable")
-        primitive = np.zeros(len(points), np.int32) if primitive is None else np.asarray(primitive, np.int32)
-        return cls(params, points, normals, np.asarray(model, np.int32), primitive, keys[order],
+        return cls(params, points, normals, np.asarray(model, np.int32), np.asarray(primitive, np.int32), keys[order],
                    distances[order].astype(np.float32), np.asarray(first, np.int32)[order],
                    np.asarray(second, np.int32)[order])
 

@@ -15,7 +15,7 @@ import numpy as np
 from psorr.single_plane import in_plane_sides
 from psorr.types import Primitive, PrimitiveKind
 
-RADIUS_TOLERANCE = 0.3  # a scene cylinder's radius within 30 % of the model's (as box verification asks)
+RADIUS_TOLERANCE = 0.3  # a scene cylinder's radius within 30 % of the model's (box verification asks the same)
 SIDE_RATIO = 1.2        # a scene face's sides at most this times the model face's ...
 SIDE_SLACK = 0.01       # ... plus this many metres: boxes of noisy points grow by a few millimetres
 

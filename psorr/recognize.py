@@ -27,7 +27,7 @@ from psorr.errors import InvalidInputError
 from psorr.library import ModelLibrary
 from psorr.orr import orr_hypotheses
 from psorr.pose_clusters import densest_poses
-from psorr.primitive_match import PrimitiveSizes
+from psorr.primitive_match import RADIUS_TOLERANCE, PrimitiveSizes
 from psorr.single_plane import SinglePlaneMatcher, SinglePlaneParams
 from psorr.types import Detection, OrientedBox, PointCloud, PrimitiveKind
 from psorr.verify import CheckParams, SceneView, check_pose, refine_icp
@@ -115,7 +115,7 @@ def _agree(model_prim, R, scene_prim) -> bool:
     if model_prim.kind is PrimitiveKind.PLANE:
         return (R @ model_prim.normal) @ scene_prim.normal > _COS_AGREE
     return (abs((R @ model_prim.axis) @ scene_prim.axis) > _COS_AGREE
-            and abs(model_prim.radius - scene_prim.radius) < 0.3 * model_prim.radius)
+            and abs(model_prim.radius - scene_prim.radius) < RADIUS_TOLERANCE * model_prim.radius)
 
 
 def _moved(box: OrientedBox, T: np.ndarray) -> OrientedBox:

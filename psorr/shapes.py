@@ -60,9 +60,7 @@ def faces_outward(params, points: np.ndarray, normals: np.ndarray) -> np.ndarray
     ignores this sign, so a bush's wall and its bore, one coaxial radius apart,
     can fall to one cylinder of the radius in between.
     """
-    p = np.asarray(params, float)
-    rel = points - p[:3]
-    radial = rel - np.outer(rel @ p[3:6], p[3:6])
+    radial = surface_normals(PrimitiveKind.CYLINDER, params, points)
     return np.einsum("ij,ij->i", radial, normals) > 0
 
 

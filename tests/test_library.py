@@ -27,7 +27,8 @@ def test_a_matched_pair_gives_the_exact_rigid_motion():
     n2 = rng.normal(size=(20, 3))
     n2 /= np.linalg.norm(n2, axis=1, keepdims=True)
     points, normals = np.vstack([p1, p2]), np.vstack([n1, n2])
-    table = PairTable.build(HashParams(), points, normals, np.zeros(40), np.arange(20), np.arange(20, 40))
+    table = PairTable.build(HashParams(), points, normals, np.zeros(40), np.arange(40), np.arange(20),
+                            np.arange(20, 40))
     T = np.eye(4)
     T[:3, :3], T[:3, 3] = Rotation.random(random_state=1).as_matrix(), (0.3, -0.2, 1.0)
     moved = lambda x: x @ T[:3, :3].T  # noqa: E731

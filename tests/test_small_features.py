@@ -60,13 +60,13 @@ def test_lookup_probes_the_neighbouring_bin_across_a_border():
     n1 = np.array([[np.cos(d), np.sin(d), 0.0]])
     points = np.array([[0, 0, 0], [0.05, 0, 0]], float)
     normals = np.vstack([n1, n1 * [[-1, 1, 1]]])
-    table = PairTable.build(params, points, normals, np.zeros(2), np.array([0]), np.array([1]))
+    table = PairTable.build(params, points, normals, np.zeros(2), np.arange(2), np.array([0]), np.array([1]))
     # The scene sees the pair turned 0.4 deg about z: n1 now at 36.3 deg, across the border.
     R = Rotation.from_euler("z", 0.4, degrees=True).as_matrix()
     scene_n1 = n1 @ R.T
     found, _ = table.lookup(points[:1], scene_n1, points[1:], normals[1:])
     assert len(found) == 1
-    strict = PairTable.build(HashParams(nearest_neighbour_bins=False), points, normals, np.zeros(2),
+    strict = PairTable.build(HashParams(nearest_neighbour_bins=False), points, normals, np.zeros(2), np.arange(2),
                              np.array([0]), np.array([1]))
     assert len(strict.lookup(points[:1], scene_n1, points[1:], normals[1:])[0]) == 0
 
