@@ -37,7 +37,10 @@ def orr_hypotheses(recognizer, cloud, view, rng):
         if len(far) == 0:
             continue
         b = int(rng.choice(far))
-        s, rows = library.table.lookup(pts[[a]], nrm[[a]], pts[[b]], nrm[[b]])
+        # Papazov looks a pair up in its own cell only. Raw points are as dense as the model's
+        # samples, so the cell holds the match; the neighbouring cells' extra matches would only
+        # dilute the few poses drawn from them.
+        s, rows = library.table.lookup(pts[[a]], nrm[[a]], pts[[b]], nrm[[b]], neighbours=False)
         if len(rows) == 0:
             continue
         pick = rng.choice(len(rows), size=min(len(rows), 4), replace=False)

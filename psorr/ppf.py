@@ -86,13 +86,13 @@ class HashParams:
     def _key(self, bins: np.ndarray) -> np.ndarray:
         return (bins[..., 0] * self.n_bins + bins[..., 1]) * self.n_bins + bins[..., 2]
 
-    def probe_keys(self, angles: np.ndarray) -> np.ndarray:
-        """(M, C) keys a scene pair is looked up under: its own cell, and with nearest_neighbour_bins
-        every combination with the neighbouring bin nearer each angle (C = 8). A scene centroid is
-        seldom where a model sample was drawn, so its angles land a few degrees off the model pair's,
-        and across a bin border as often as not."""
+    def probe_keys(self, angles: np.ndarray, neighbours: bool | None = None) -> np.ndarray:
+        """(M, C) keys a scene pair is looked up under: its own cell, and with neighbours (default:
+        nearest_neighbour_bins) every combination with the neighbouring bin nearer each angle (C = 8).
+        A scene centroid is seldom where a model sample was drawn, so its angles land a few degrees
+        off the model pair's, and across a bin border as often as not."""
         position, bins = self._bins(angles)
-        if not self.nearest_neighbour_bins:
+        if not (self.nearest_neighbour_bins if neighbours is None else neighbours):
             return self._key(bins)[:, None]
         step = np.where(position - bins < 0.5, -1, 1)
         neighbour = np.clip(bins + step, 0, self.n_bins - 1)
@@ -140,11 +140,11 @@ class PairTable:
     def __len__(self) -> int:
         return len(self.keys)
 
-    def lookup(self, p1, n1, p2, n2) -> tuple[np.ndarray, np.ndarray]:
-        """Matches for M scene pairs: (scene pair index (K,), table row (K,)),
-        rows in the same cell whose distance is within the tolerance."""
+    def lookup(self, p1, n1, p2, n2, neighbours: bool | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Matches for M scene pairs: (scene pair index (K,), table row (K,)), rows in the
+        probed cells (see HashParams.probe_keys) whose distance is within the tolerance."""
         angles, distances = pair_features(p1, n1, p2, n2)
-        probes = self.params.probe_keys(angles)
+        probes = self.params.probe_keys(angles, neighbours)
         keys = probes.ravel()
         lo = np.searchsorted(self.keys, keys, side="left")
         hi = np.where(keys >= 0, np.searchsorted(self.keys, keys, side="right"), lo)

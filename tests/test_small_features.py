@@ -69,6 +69,9 @@ def test_lookup_probes_the_neighbouring_bin_across_a_border():
     strict = PairTable.build(HashParams(nearest_neighbour_bins=False), points, normals, np.zeros(2), np.arange(2),
                              np.array([0]), np.array([1]))
     assert len(strict.lookup(points[:1], scene_n1, points[1:], normals[1:])[0]) == 0
+    # ORR asks for its own cell only, whatever the table's default.
+    assert len(table.lookup(points[:1], scene_n1, points[1:], normals[1:], neighbours=False)[0]) == 0
+    assert len(table.lookup(points[:1], normals[:1], points[1:], normals[1:], neighbours=False)[0]) == 1
 
 
 def test_a_vote_cluster_straddling_a_cell_border_still_wins():
