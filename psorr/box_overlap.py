@@ -216,10 +216,8 @@ def intersection_volume(box_a: OrientedBox, box_b: OrientedBox) -> float:
     pose = _mutual_corners(box_a, box_b)
     half, corners = pose[2], pose[3]
     contained = np.logical_and.reduce(np.abs(corners) <= half[:, None, :] + _TOL, (1, 2)).tolist()
-    if contained[0]:
-        return vol_b  # B inside A: no hull needed
-    if contained[1]:
-        return vol_a
+    if contained[0] or contained[1]:
+        return min(vol_a, vol_b)  # one inside the other (within the slack): no hull needed
     points = _clipped_edge_points(*pose)
     if len(points) < 4:
         return 0.0
