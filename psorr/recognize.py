@@ -7,7 +7,8 @@ how each is screened:
 - PSORR pairs plane centroids and cylinder axes of the decomposed scene
   (its leftover points decomposed again, finer), clusters the poses by
   vote, and screens each by intersecting model and scene primitive boxes
-  (section 2.1.4).
+  (section 2.1.4). Once detections explain some parts, it pairs again among
+  the primitives they leave unexplained, then tries single faces.
 - ORR (Papazov and Burschka) pairs random oriented scene points and screens
   every hypothesis with the point-level check.
 """
@@ -20,16 +21,16 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from psorr.ambiguity import NearSymmetryResolver
-from psorr.box_overlap import boxes_to_arrays, intersection_ratio, overlap_candidates
+from psorr.box_score import PrimitiveArrays, box_scores
 from psorr.decomposition import DecomposeParams, decompose
 from psorr.decomposition.detail import decompose_leftovers
 from psorr.errors import InvalidInputError
 from psorr.library import ModelLibrary
 from psorr.orr import orr_hypotheses
 from psorr.pose_clusters import densest_poses
-from psorr.primitive_match import RADIUS_TOLERANCE, PrimitiveSizes
+from psorr.primitive_match import PrimitiveSizes
 from psorr.single_plane import SinglePlaneMatcher, SinglePlaneParams
-from psorr.types import Detection, OrientedBox, PointCloud, PrimitiveKind
+from psorr.types import Detection, PointCloud, PrimitiveKind
 from psorr.verify import CheckParams, SceneView, check_pose, refine_icp
 
 METHODS = ("psorr", "orr")
@@ -41,11 +42,12 @@ class RecognizeParams:
 
     decompose: DecomposeParams = field(default_factory=lambda: DecomposeParams(voxel_size=0.008))
     leftover_voxel: float | None = 0.005  # PSORR: points the decomposition left unlabelled, again at this voxel
-    max_hypotheses: int = 100           # PSORR: clustered hypotheses screened by boxes
+    max_hypotheses: int = 100           # PSORR: clustered hypotheses screened by boxes, per round
     cluster_cell: float = 0.02          # PSORR: position grid of the vote clustering
     min_box_score: float = 0.1
     box_thickness: float = 0.04         # boxes are thickened to this: pair poses are off by a centimetre or so
     refine_top: int = 24                # best screened hypotheses that get ICP and the point check
+    pair_rounds: int = 2                # PSORR: pairing again among the primitives detections leave unexplained
     orr_hypotheses: int = 1500          # ORR: hypotheses drawn and checked point by point
     icp_distance: float = 0.012
     check: CheckParams = field(default_factory=CheckParams)
@@ -56,7 +58,7 @@ class RecognizeParams:
     single_plane: SinglePlaneParams = field(default_factory=SinglePlaneParams)  # PSORR: poses from one face
 
     def __post_init__(self):
-        for name in ("max_hypotheses", "refine_top", "orr_hypotheses", "min_support"):
+        for name in ("max_hypotheses", "refine_top", "pair_rounds", "orr_hypotheses", "min_support"):
             if int(getattr(self, name)) < 1:
                 raise InvalidInputError(f"RecognizeParams.{name} must be >= 1, got {getattr(self, name)}")
         if self.leftover_voxel is not None and not self.leftover_voxel > 0:
@@ -104,46 +106,6 @@ def _scene_oriented_points(primitives, max_extent):
 
 
 _COARSE = CheckParams(max_points=300)
-_COS_AGREE = np.cos(np.radians(20.0))
-
-
-def _agree(model_prim, R, scene_prim) -> bool:
-    """Same kind, and orientation within 20 degrees (and radius within 30 %):
-    a box overlap between a wall and a floor says nothing for the pose."""
-    if model_prim.kind is not scene_prim.kind:
-        return False
-    if model_prim.kind is PrimitiveKind.PLANE:
-        return (R @ model_prim.normal) @ scene_prim.normal > _COS_AGREE
-    return (abs((R @ model_prim.axis) @ scene_prim.axis) > _COS_AGREE
-            and abs(model_prim.radius - scene_prim.radius) < RADIUS_TOLERANCE * model_prim.radius)
-
-
-def _moved(box: OrientedBox, T: np.ndarray) -> OrientedBox:
-    # transform_box validates T every call; hypotheses come from frame algebra
-    # and are rigid by construction, and this runs for every primitive of every one.
-    return OrientedBox(T[:3, :3] @ box.center + T[:3, 3], T[:3, :3] @ box.rotation, box.extent)
-
-
-def _box_score(model, T, scene_prims, thickness: float) -> float:
-    """Area-weighted mean, over the model's sensor-facing primitives, of the
-    share of each (thickened) primitive box that an agreeing scene primitive's
-    box covers."""
-    R = T[:3, :3]
-    prims, boxes, weights = [], [], []
-    for p in model.graph.primitives:
-        box = _moved(p.box, T)
-        if p.kind is PrimitiveKind.PLANE and (R @ p.normal) @ -box.center <= 0:
-            continue  # faces away from the sensor: no scene box can match it
-        prims.append(p)
-        boxes.append(box)
-        weights.append(p.n_points)  # surface area (samples are even); a flat box's volume is ~0
-    if not boxes or not scene_prims:
-        return 0.0
-    near = overlap_candidates(*boxes_to_arrays(boxes), *boxes_to_arrays([s.box for s in scene_prims]))
-    covered = [max((intersection_ratio(b, scene_prims[j].box, thickness) for j in np.flatnonzero(near[i])
-                    if _agree(prims[i], R, scene_prims[j])), default=0.0)
-               for i, b in enumerate(boxes)]
-    return float(np.average(covered, weights=weights))
 
 
 def _share_out(order, models, limit):
@@ -172,6 +134,7 @@ class Recognizer:
         self.model_centres = np.array([m.points.mean(axis=0) for m in library.models])  # (M, 3), model frames
         self._resolvers: dict[str, NearSymmetryResolver] = {}  # built on a model's first detection
         self._single_plane = SinglePlaneMatcher(library.models, self.params.single_plane)
+        self._model_prims = [PrimitiveArrays.of(m.graph.primitives) for m in library.models]
 
     def recognize(self, cloud: PointCloud, rng: np.random.Generator | None = None) -> Recognition:
         if not isinstance(cloud, PointCloud):
@@ -180,22 +143,11 @@ class Recognizer:
         start = time.perf_counter()
         view = SceneView(cloud)
         if self.method == "psorr":
-            candidates, n_hyp, verify_ms, decomposition_ms, scene, faces = self._psorr(cloud, view, rng)
+            detections, n_hyp, verify_ms, decomposition_ms = self._psorr(cloud, view, rng)
         else:
             candidates, n_hyp, verify_ms = orr_hypotheses(self, cloud, view, rng)
+            detections, _ = self._accept(view, candidates)
             decomposition_ms = 0.0
-        detections, claimed = self._accept(view, candidates)
-        if self.method == "psorr" and self.params.single_plane.enabled:
-            # A part showing one face gives no pair; its face, matched by size, still gives a pose.
-            # Only faces no detection explains are tried, so these few poses do not crowd out the pairs'.
-            t1 = time.perf_counter()
-            unexplained = [scene.primitives[k] for k in faces
-                           if not _explained(view, claimed, cloud.points[scene.labels == k])]
-            face_poses, face_models = self._single_plane.hypotheses(unexplained)
-            face_candidates = self._best_face_poses(view, face_poses, face_models)
-            n_hyp, verify_ms = n_hyp + len(face_poses), verify_ms + (time.perf_counter() - t1) * 1e3
-            more, claimed = self._accept(view, face_candidates, claimed)
-            detections += more
         total = (time.perf_counter() - start) * 1e3
         stats = RecognitionStats(self.method, n_hyp, verify_ms / max(n_hyp, 1), decomposition_ms, total,
                                  self.library.train_ms)
@@ -209,7 +161,37 @@ class Recognizer:
             scene = decompose_leftovers(cloud, scene, p.leftover_voxel, p.decompose, rng)
         decomposition_ms = (time.perf_counter() - t0) * 1e3
         pts, nrm, used = _scene_oriented_points(scene.primitives, 1.2 * self.max_diameter)
-        scene_prims = [scene.primitives[k] for k in used]
+        prims = [scene.primitives[k] for k in used]
+        members = [cloud.points[scene.labels == k] for k in used]
+        detections, claimed, n_hyp, verify_ms = [], None, 0, 0.0
+        open_ = np.ones(len(used), dtype=bool)  # primitives no detection explains yet
+        for _ in range(p.pair_rounds):
+            # In clutter, pairs across other parts fill a model's hypothesis quota; once those parts are
+            # explained, their primitives leave the pairing and a part with few votes gets its turn.
+            keep = np.flatnonzero(open_)
+            candidates, n, ms = self._pair_candidates(pts[keep], nrm[keep], [prims[k] for k in keep])
+            more, claimed = self._accept(view, candidates, claimed)
+            detections, n_hyp, verify_ms = detections + more, n_hyp + n, verify_ms + ms
+            open_ &= [not _explained(view, claimed, m) for m in members]
+            if not more or open_.sum() < 2:
+                break
+        if p.single_plane.enabled:
+            # A part showing one face gives no pair; its face, matched by size, still gives a pose.
+            # Only faces no detection explains are tried, so these few poses do not crowd out the pairs'.
+            t1 = time.perf_counter()
+            faces = [prims[k] for k in np.flatnonzero(open_) if prims[k].kind is PrimitiveKind.PLANE]
+            face_poses, face_models = self._single_plane.hypotheses(faces)
+            face_candidates = self._best_face_poses(view, face_poses, face_models)
+            n_hyp, verify_ms = n_hyp + len(face_poses), verify_ms + (time.perf_counter() - t1) * 1e3
+            more, claimed = self._accept(view, face_candidates, claimed)
+            detections += more
+        return detections, n_hyp, verify_ms, decomposition_ms
+
+    def _pair_candidates(self, pts, nrm, scene_prims):
+        """Pose hypotheses from pairs of the scene's oriented points (K, 3) and their primitives: matched
+        in the hash table, clustered by vote, and the best by box score. Returns the (model index, pose)
+        candidates, the number of clustered hypotheses, and the ms spent verifying them."""
+        p = self.params
         poses, models = np.empty((0, 4, 4)), np.empty(0, dtype=np.int64)
         if len(pts) >= 2:  # pairs need two oriented points
             i, j = np.nonzero(np.linalg.norm(pts[:, None] - pts[None], axis=2) <= self.max_diameter)
@@ -222,13 +204,14 @@ class Recognizer:
                 poses, models = densest_poses(poses, models, scene_index, self.model_centres, p.cluster_cell,
                                               p.max_hypotheses)
         t1 = time.perf_counter()
-        scores = np.array([_box_score(self.library.models[m], T, scene_prims, p.box_thickness)
-                           for T, m in zip(poses, models)])
+        scores, scene = np.zeros(len(poses)), PrimitiveArrays.of(scene_prims)
+        for m in np.unique(models):
+            mine = models == m
+            scores[mine] = box_scores(self._model_prims[m], poses[mine], scene, p.box_thickness)
         order = np.argsort(-scores, kind="stable")
         order = _share_out(order[scores[order] >= p.min_box_score], models, p.refine_top)
         verify_ms = (time.perf_counter() - t1) * 1e3
-        faces = [k for k in used if scene.primitives[k].kind is PrimitiveKind.PLANE]  # for poses from one face
-        return [(models[k], poses[k]) for k in order], len(poses), verify_ms, decomposition_ms, scene, faces
+        return [(models[k], poses[k]) for k in order], len(poses), verify_ms
 
     def _plausible(self, scene_prims, i, j, scene_index, rows):
         """The lookup matches whose scene primitives could be parts of their model primitives (kind, size)."""
