@@ -6,8 +6,9 @@ cannot tell the two poses apart, and the turned one is often accepted. The diffe
 small features (a window, a gland hole, a row of holes) that only a dense point check sees.
 
 :func:`near_symmetries` finds, per model, the half turns about its principal axes (through
-the centroid of its samples) that move its surface by little on average; exact symmetries
-qualify too, which is harmless. :func:`near_continuous_axis` finds an axis about which any turn
+the centroid of its samples), each settled onto the model by ICP, that move its surface by little
+on average (an L bracket's legs swap about their bisector, a few degrees off its principal axes);
+exact symmetries qualify too, which is harmless. :func:`near_continuous_axis` finds an axis about which any turn
 is a near-symmetry (a flanged hub, whose yaw only its bolt holes fix). :class:`NearSymmetryResolver`
 re-fits each turned pose with ICP, or searches the turn about the axis, and keeps the pose whose
 rendered depth (:mod:`psorr.depth_compare`) agrees best with the measurement where the candidates
@@ -34,8 +35,9 @@ SWITCH_RATIO = 0.9
 
 
 def near_symmetries(points: np.ndarray, diameter: float, limit: float = NEAR_MEAN_DISTANCE) -> np.ndarray:
-    """(K, 4, 4) model-frame half turns S (about principal axes through the samples' centroid) with
-    mean nearest-sample distance of S(points) to points below ``limit`` x ``diameter``; K may be 0.
+    """(K, 4, 4) model-frame near-symmetries S: half turns about principal axes through the samples'
+    centroid, each settled by ICP of S(points) onto points, whose mean nearest-sample distance
+    is below ``limit`` x ``diameter``; one per distinct turn, and K may be 0.
 
     Args:
         points: (N, 3) even surface samples of the model, metres.
@@ -50,10 +52,34 @@ def near_symmetries(points: np.ndarray, diameter: float, limit: float = NEAR_MEA
         R = 2.0 * np.outer(axis, axis) - np.eye(3)  # a half turn about the axis
         S = np.eye(4)
         S[:3, :3], S[:3, 3] = R, centroid - R @ centroid
-        distance, _ = tree.query(subset @ R.T + S[:3, 3])
-        if distance.mean() < limit * diameter:
+        # A part that is not quite symmetric (an L bracket with legs of 60 and 50 mm) has its
+        # principal axes a few degrees off the turn that swaps its halves; settle onto that turn.
+        S, distance = _settled(S, subset, tree)
+        duplicate = any(np.linalg.norm(S[:3, :3] - F[:3, :3]) < 0.1 for F in found)
+        if distance.mean() < limit * diameter and not duplicate:
             found.append(S)
     return np.array(found).reshape(-1, 4, 4)
+
+
+def _settled(S: np.ndarray, points: np.ndarray, tree: cKDTree, iterations: int = 15) -> tuple[np.ndarray, np.ndarray]:
+    """The self-map S (4, 4) refined by point-to-point ICP of S(points) onto the model's own
+    samples (``tree``), and the final nearest-sample distances (N,) in metres."""
+    sparse = points[::3]  # the fit needs far fewer points than the final distances
+    for _ in range(iterations):
+        moved = sparse @ S[:3, :3].T + S[:3, 3]
+        _, nearest = tree.query(moved)
+        target = tree.data[nearest]
+        mu_m, mu_t = moved.mean(axis=0), target.mean(axis=0)
+        U, _, Vt = np.linalg.svd((moved - mu_m).T @ (target - mu_t))
+        D = np.diag([1.0, 1.0, np.sign(np.linalg.det(Vt.T @ U.T))])
+        step = np.eye(4)
+        step[:3, :3] = Vt.T @ D @ U.T
+        step[:3, 3] = mu_t - step[:3, :3] @ mu_m
+        S = step @ S
+        if np.abs(step[:3, 3]).max() < 1e-6 and np.trace(step[:3, :3]) > 3.0 - 1e-10:
+            break  # settled
+    distance, _ = tree.query(points @ S[:3, :3].T + S[:3, 3])
+    return S, distance
 
 
 def near_continuous_axis(model, renderer: DepthRenderer,
