@@ -1,0 +1,130 @@
+"""The PLY codec: the vertex element of a PLY file <-> PointCloud.
+
+Reads ascii, binary_little_endian and binary_big_endian files: vertex x/y/z, optional
+nx/ny/nz, red/green/blue and label properties; elements before the vertices are skipped.
+Writes float64 points and normals, 8-bit colours and int32 labels. The record decoders
+and the fields -> PointCloud mapping are shared with the PCD codec, in :mod:`psorr.records`.
+
+Everything here raises CloudFileError naming the file (InvalidInputError for a cloud that
+cannot be written), because callers catch one error type per bad file.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from psorr.errors import CloudFileError, InvalidInputError
+from psorr.records import Field, cloud_from_fields, decode_ascii, decode_binary, encode_records
+from psorr.types import PointCloud
+
+_PLY_TYPES = {
+    "char": "i1", "uchar": "u1", "short": "i2", "ushort": "u2", "int": "i4", "uint": "u4",
+    "float": "f4", "double": "f8", "int8": "i1", "uint8": "u1", "int16": "i2",
+    "uint16": "u2", "int32": "i4", "uint32": "u4", "float32": "f4", "float64": "f8",
+}  # fmt: skip
+_PLY_ENDIAN = {"ascii": "<", "binary_little_endian": "<", "binary_big_endian": ">"}
+_PLY_MAX_HEADER = 1 << 16  # bytes; a header longer than this is not a PLY header
+_NORMALS = ("nx", "ny", "nz")
+_BAD_PLY = "re-export the file, or check it was copied completely"
+
+
+def _parse_ply_header(path: Path, data: bytes):
+    """-> (format, elements [(name, count, [(property, dtype code or None for a list)])],
+    offset of the data)."""
+    end = data.find(b"end_header", 0, _PLY_MAX_HEADER)
+    newline = data.find(b"\n", end)
+    if not data.startswith(b"ply") or end < 0 or newline < 0:
+        raise CloudFileError(path, "malformed PLY header: no 'ply' magic or 'end_header' line",
+                             _BAD_PLY)
+    try:
+        lines = data[:end].decode("ascii").splitlines()[1:]
+    except UnicodeDecodeError:
+        raise CloudFileError(path, "malformed PLY header: non-text bytes", _BAD_PLY) from None
+    fmt, elements = None, []
+    for line in lines:
+        words = line.split()
+        try:
+            if not words or words[0] in ("comment", "obj_info"):
+                continue
+            if words[0] == "format" and words[1] in _PLY_ENDIAN:
+                fmt = words[1]
+            elif words[0] == "element" and int(words[2]) >= 0:
+                elements.append((words[1], int(words[2]), []))
+            elif words[0] == "property" and words[1] == "list":
+                elements[-1][2].append((words[4], None))  # variable length: no one dtype
+            elif words[0] == "property":
+                elements[-1][2].append((words[2], _PLY_TYPES[words[1]]))
+            else:
+                raise ValueError
+        except (IndexError, KeyError, ValueError):
+            raise CloudFileError(path, f"malformed PLY header line {line.strip()[:60]!r}",
+                                 _BAD_PLY) from None
+    if fmt is None:
+        raise CloudFileError(path, "malformed PLY header: no supported 'format' line", _BAD_PLY)
+    return fmt, elements, newline + 1
+
+
+def decode_ply(path: Path, data: bytes) -> PointCloud:
+    """The bytes of a PLY file (ascii or binary, either endianness) -> a PointCloud of its
+    vertex element. ``path`` only names the file in errors."""
+    fmt, elements, offset = _parse_ply_header(path, data)
+    endian, skip_rows = _PLY_ENDIAN[fmt], 0
+    for name, count, properties in elements:
+        has_list = any(code is None for _, code in properties)
+        if name == "vertex":
+            break
+        if has_list and fmt != "ascii":
+            # Skipping variable-length rows needs a per-row walk; no exporter we know of
+            # puts them before the vertices, so refuse rather than guess.
+            raise CloudFileError(path, f"the {name!r} element with list properties comes "
+                                 "before the vertices", "re-export with vertices first")
+        offset += count * sum(np.dtype(code).itemsize for _, code in properties)
+        skip_rows += count
+    else:
+        raise CloudFileError(path, "no vertex element", "export the cloud's vertices")
+    if has_list:
+        raise CloudFileError(path, "the vertex element has list properties",
+                             "re-export with scalar vertex properties only")
+    fields = [Field(p, np.dtype(endian + code)) for p, code in properties]
+    if fmt == "ascii":
+        try:
+            text = data[offset:].decode("ascii")
+        except UnicodeDecodeError:
+            raise CloudFileError(path, "ascii PLY data holds non-text bytes", _BAD_PLY) from None
+        columns = decode_ascii(path, text, fields, count, skip_rows=skip_rows, exact=False)
+    else:
+        columns = decode_binary(path, data, offset, fields, count)
+    return cloud_from_fields(path, columns)
+
+
+def encode_ply(cloud: PointCloud, binary: bool) -> bytes:
+    """``cloud`` -> a binary_little_endian (or ascii) PLY file of one vertex element."""
+    f8 = np.dtype("<f8")
+    fields = [Field(axis, f8) for axis in "xyz"]
+    columns = [cloud.points[:, i] for i in range(3)]
+    if cloud.normals is not None:
+        fields += [Field(name, f8) for name in _NORMALS]
+        columns += [cloud.normals[:, i] for i in range(3)]
+    if cloud.colors is not None:
+        if not np.isfinite(cloud.colors).all():
+            raise InvalidInputError("colors hold NaN; PLY colours are 8-bit integers")
+        fields += [Field(name, np.dtype("u1")) for name in ("red", "green", "blue")]
+        columns += list(np.rint(cloud.colors * 255).astype(np.uint8).T)
+    if cloud.labels is not None:
+        if cloud.labels.min() < -(2**31) or cloud.labels.max() >= 2**31:
+            raise InvalidInputError("PLY labels are int32; these labels do not fit")
+        fields.append(Field("label", np.dtype("<i4")))
+        columns.append(cloud.labels)
+    names = {"f8": "double", "u1": "uchar", "i4": "int"}
+    header = [
+        "ply",
+        "format binary_little_endian 1.0" if binary else "format ascii 1.0",
+        "comment written by psorr",
+        f"element vertex {len(cloud)}",
+        *(f"property {names[f.dtype.str[1:]]} {f.name}" for f in fields),
+        "end_header",
+    ]
+    body = encode_records(fields, columns, ascii=not binary)
+    return ("\n".join(header) + "\n").encode("ascii") + body
