@@ -16,7 +16,8 @@ import trimesh
 from psorr.camera import CameraIntrinsics, depth_to_cloud, look_at
 from psorr.errors import InvalidInputError
 from psorr.kinect_noise import KINECT_V1, KinectNoise, kinect_noise_with_source
-from psorr.synthetic import TABLE_EXTENTS, render_meshes
+from psorr.raycast import render_meshes
+from psorr.synthetic import TABLE_EXTENTS
 from psorr.types import PointCloud
 
 TABLE_LABEL = 0
