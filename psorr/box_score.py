@@ -75,7 +75,8 @@ def box_scores(model_prims: PrimitiveArrays, poses: np.ndarray, scene: Primitive
     facing = ~model_prims.is_plane | (np.einsum("hpi,hpi->hp", direction, centers) < 0)
     cos = np.einsum("hpi,si->hps", direction, scene.direction)
     same_kind = model_prims.is_plane[:, None] == scene.is_plane[None, :]                 # (P, S)
-    radius_ok = np.abs(model_prims.radius[:, None] - scene.radius[None, :]) < RADIUS_TOLERANCE * model_prims.radius[:, None]
+    radius_gap = np.abs(model_prims.radius[:, None] - scene.radius[None, :])
+    radius_ok = radius_gap < RADIUS_TOLERANCE * model_prims.radius[:, None]
     agree = np.where(model_prims.is_plane[:, None], cos > _COS_AGREE, (np.abs(cos) > _COS_AGREE) & radius_ok)
     agree &= same_kind & facing[:, :, None]
     extents = np.broadcast_to(model_prims.extents, (H, P, 3))
