@@ -247,7 +247,8 @@ class Recognizer:
         scored = []
         for model_index, T in candidates:
             model = self.library.models[model_index]
-            T = refine_icp(view, model.points, model.normals, T, p.icp_distance, max_points=1000)
+            # Coarse: 1000 model points and 15 iterations, enough to tell the hopeless candidates (below).
+            T = refine_icp(view, model.points, model.normals, T, p.icp_distance, iterations=15, max_points=1000)
             # Most candidates are wrong, and one coarse ICP shows it: too little of the model is measured,
             # or the sensor sees through too much of it. The fine pass is kept for the rest.
             coarse = check_pose(view, model.points, model.normals, T, _COARSE)
