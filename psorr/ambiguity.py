@@ -17,6 +17,8 @@ differ. When the features are hidden the poses cannot be told apart, and the ori
 
 from __future__ import annotations
 
+import weakref
+
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -114,6 +116,10 @@ def near_continuous_axis(model, renderer: DepthRenderer,
     return best
 
 
+# A model's near-symmetries (turns, axis), by model object: Models are immutable.
+_FOUND: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
 def _turn(axis: np.ndarray, angle: float) -> np.ndarray:
     """(3, 3) rotation by ``angle`` radians about the unit ``axis``."""
     K = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
@@ -132,8 +138,11 @@ class NearSymmetryResolver:
     def __init__(self, model):
         self.model = model
         self.renderer = DepthRenderer(model.vertices, model.faces)
-        self.turns = near_symmetries(model.points, model.diameter)
-        self.axis = near_continuous_axis(model, self.renderer)
+        found = _FOUND.get(model)
+        if found is None:  # about 0.1 s a model, so once per model object however many recognizers use it
+            found = _FOUND[model] = (near_symmetries(model.points, model.diameter),
+                                     near_continuous_axis(model, self.renderer))
+        self.turns, self.axis = found
         self._centre = model.points.mean(axis=0)
 
     def resolve(self, view: SceneView, T_cloud_model: np.ndarray, icp_distance: float) -> tuple[np.ndarray, PoseCheck]:
