@@ -90,8 +90,7 @@ class SceneView:
         self.height = int(self.focal * (uy.max() - uy.min())) + 5
         u, v, _ = self.project(pts)
         depth = np.full(self.width * self.height, np.inf)
-        order = np.argsort(-pts[:, 2], kind="stable")  # far first, so the nearest point wins each pixel
-        depth[(v * self.width + u)[order]] = pts[order, 2]
+        np.minimum.at(depth, v * self.width + u, pts[:, 2])  # the nearest point wins each pixel
         self.depth = depth
         down = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(pts)).voxel_down_sample(icp_voxel)
         self.down = down
