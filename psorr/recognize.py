@@ -233,11 +233,6 @@ class Recognizer:
         order = _share_out(order[scores[order] >= sp.min_score], models, sp.top)
         return [(models[k], poses[k]) for k in order]
 
-    def _resolver(self, model) -> NearSymmetryResolver:
-        if model.name not in self._resolvers:
-            self._resolvers[model.name] = NearSymmetryResolver(model)
-        return self._resolvers[model.name]
-
     def _accept(self, view, candidates, claimed: np.ndarray | None = None) -> tuple[list[Detection], np.ndarray]:
         """Detections among ``candidates`` (model index, pose), and the 4x4-pixel blocks claimed so far
         (``claimed``: by earlier detections, which a new one may share only up to max_shared_pixels)."""
@@ -272,7 +267,7 @@ class Recognizer:
             claimed[blocks] = True
             # Only now, on the few survivors, is a dense check affordable: it tells a part from its
             # near-symmetric twin pose (a tray turned end for end) by the small features.
-            T, check = self._resolver(model).resolve(view, T, p.icp_distance)
+            T, check = self._resolvers[model.name].resolve(view, T, p.icp_distance)
             detections.append(Detection(model.name, T, check.score, check.visible_fraction))
         return detections, claimed
 
