@@ -1,0 +1,46 @@
+"""psorr.verify.SceneView: the depth buffer and the ICP target built once per scene."""
+
+import numpy as np
+import open3d as o3d
+
+from psorr.scenes import workpiece_scene
+from psorr.verify import SceneView
+from psorr.workpieces import load_catalog
+
+
+def _scene(names, seed):
+    catalog = load_catalog()
+    return workpiece_scene(np.random.default_rng(seed), {n: catalog[n].load_mesh() for n in names}, names)
+
+
+def test_the_depth_buffer_keeps_the_nearest_point_of_each_pixel():
+    scene = _scene(["bracket"], 3)
+    view = SceneView(scene.cloud)
+    u, v, inside = view.project(view.points)
+    pixel = v * view.width + u
+    nearest = np.full(view.width * view.height, np.inf)
+    for p, z in zip(pixel, view.points[:, 2]):  # the definition, one point at a time
+        nearest[p] = min(nearest[p], z)
+    assert inside.all()
+    np.testing.assert_array_equal(view.depth, nearest)
+
+
+def test_icp_target_normals_near_the_parts_match_a_whole_cloud_estimate():
+    scene = _scene(["chassis", "bushing"], 4)
+    view = SceneView(scene.cloud)
+    target = view.icp_target
+    normals = np.asarray(target.normals)
+    points = np.asarray(target.points)
+    whole = o3d.geometry.PointCloud(target.points)
+    whole.estimate_normals(o3d.geometry.KDTreeSearchParamHybrid(radius=3 * view.icp_voxel, max_nn=12))
+    whole.orient_normals_towards_camera_location(np.zeros(3))
+    expected = np.asarray(whole.normals)
+    height = np.abs(points @ view.support_plane[:3] + view.support_plane[3])
+    on_parts = height > 0.008  # off the table by more than its RANSAC band
+    assert on_parts.sum() > 500
+    np.testing.assert_allclose(normals[on_parts], expected[on_parts], atol=1e-9)
+    # The rest of the table takes the plane's normal; estimates there scatter about it with the noise.
+    far = ~on_parts & (np.abs(normals @ view.support_plane[:3]) > 1 - 1e-12)
+    assert far.sum() > 0.5 * len(points)
+    assert np.median(np.abs((normals[far] * expected[far]).sum(axis=1))) > 0.95
+    assert (np.linalg.norm(normals, axis=1) > 0.99).all()  # every point has a unit normal
