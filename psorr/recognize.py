@@ -19,6 +19,7 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from psorr.ambiguity import NearSymmetryResolver
 from psorr.box_score import PrimitiveArrays, box_scores
@@ -135,6 +136,7 @@ class Recognizer:
         # Built up front, as model preparation: found on a model's first detection instead, its
         # near-symmetries would add about 0.1 s to that scene.
         self._resolvers = {m.name: NearSymmetryResolver(m) for m in library.models}
+        self._model_trees = {m.name: cKDTree(m.points) for m in library.models}
         self._single_plane = SinglePlaneMatcher(library.models, self.params.single_plane)
         self._model_prims = [PrimitiveArrays.of(m.graph.primitives) for m in library.models]
 
@@ -174,7 +176,7 @@ class Recognizer:
             candidates, n, ms = self._pair_candidates(pts[keep], nrm[keep], [prims[k] for k in keep])
             more, claimed = self._accept(view, candidates, claimed)
             detections, n_hyp, verify_ms = detections + more, n_hyp + n, verify_ms + ms
-            open_ &= [not _explained(view, claimed, m) for m in members]
+            open_ &= [not self._on_detected_surface(more, m) for m in members]
             if not more or open_.sum() < 2:
                 break
         if p.single_plane.enabled:
@@ -188,6 +190,20 @@ class Recognizer:
             more, claimed = self._accept(view, face_candidates, claimed)
             detections += more
         return detections, n_hyp, verify_ms, decomposition_ms
+
+    def _on_detected_surface(self, detections, points: np.ndarray, share: float = 0.5) -> bool:
+        """Does at least ``share`` of ``points`` (M, 3), a primitive's, lie on the surface of one of ``detections``
+        (within half the ICP distance of its model's samples)? The whole surface, not the pixels it covers: a
+        part's far side in a full view is explained too, and a part behind a detected one is not."""
+        points = points[:: max(1, len(points) // 200)]
+        for d in detections:
+            model = self.library.model(d.model)
+            T_model_cloud = np.linalg.inv(d.T_cloud_model)
+            local = points @ T_model_cloud[:3, :3].T + T_model_cloud[:3, 3]
+            gap, _ = self._model_trees[model.name].query(local, distance_upper_bound=self.params.icp_distance / 2)
+            if np.isfinite(gap).mean() >= share:
+                return True
+        return False
 
     def _pair_candidates(self, pts, nrm, scene_prims):
         """Pose hypotheses from pairs of the scene's oriented points (K, 3) and their primitives: matched
@@ -271,11 +287,3 @@ class Recognizer:
             detections.append(Detection(model.name, T, check.score, check.visible_fraction))
         return detections, claimed
 
-
-def _explained(view: SceneView, claimed: np.ndarray, points: np.ndarray, share: float = 0.5) -> bool:
-    """Do accepted detections claim at least ``share`` of the pixel blocks ``points`` (M, 3) fall in?"""
-    points = points[:: max(1, len(points) // 200)]
-    u, v, inside = view.project(points)
-    if not inside.any():
-        return False
-    return bool(claimed[view.block_of(u[inside], v[inside])].mean() >= share)
