@@ -64,8 +64,11 @@ def depth_tolerance(z: np.ndarray, params: CheckParams) -> np.ndarray:
 def buffer_focal(cloud: PointCloud, ux: np.ndarray, uy: np.ndarray) -> float:
     """Focal length (pixels) at which the cloud fills its depth buffer: an
     organised cloud's own (a Kinect scaled to its width), else one pixel per
-    median angular gap between neighbouring points. A fixed 640-wide focal
-    would leave a 320x240 cloud's buffer three-quarters empty."""
+    two median angular gaps between neighbouring points. A fixed 640-wide focal
+    would leave a 320x240 cloud's buffer three-quarters empty. Two gaps, because
+    an unorganised cloud's points do not fall one per pixel: with one gap, about
+    a third of a surface's pixels would hold no point of it, and show the surface
+    behind, so a correct pose would look seen through."""
     if cloud.is_organised:
         return KINECT_FOCAL * cloud.width / 640.0
     from scipy.spatial import cKDTree
@@ -73,7 +76,7 @@ def buffer_focal(cloud: PointCloud, ux: np.ndarray, uy: np.ndarray) -> float:
     rays = np.column_stack([ux, uy])[:: max(1, len(ux) // 20000)]
     gap, _ = cKDTree(rays).query(rays, k=2)
     spacing = float(np.median(gap[:, 1]))
-    return 1.0 / spacing if spacing > 0 else KINECT_FOCAL
+    return 0.5 / spacing if spacing > 0 else KINECT_FOCAL
 
 
 class SceneView:
