@@ -197,10 +197,9 @@ class Recognizer:
         part's far side in a full view is explained too, and a part behind a detected one is not."""
         points = points[:: max(1, len(points) // 200)]
         for d in detections:
-            model = self.library.model(d.model)
             T_model_cloud = np.linalg.inv(d.T_cloud_model)
             local = points @ T_model_cloud[:3, :3].T + T_model_cloud[:3, 3]
-            gap, _ = self._model_trees[model.name].query(local, distance_upper_bound=self.params.icp_distance / 2)
+            gap, _ = self._model_trees[d.model].query(local, distance_upper_bound=self.params.icp_distance / 2)
             if np.isfinite(gap).mean() >= share:
                 return True
         return False
