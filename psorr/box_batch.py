@@ -31,14 +31,16 @@ from __future__ import annotations
 
 import numpy as np
 
+# The corner signs, and the slack within which one box counts as inside the other: nested pairs
+# take the same shortcut as in the one-pair-at-a-time box_overlap, with the same answer.
+from psorr.box_overlap import _SIGNS
+from psorr.box_overlap import _TOL as _NESTED_TOL
 from psorr.errors import InvalidInputError
 
-_NESTED_TOL = 1e-11  # box_overlap._TOL: nested pairs take the same shortcut as there
 _FLAT = 1e-12  # m: a P thinner than this on average (touching boxes, up to rounding) has volume 0
 _BLOCK = 512  # pairs clipped at once
 _PARALLEL = 0.9  # |cos| between a B axis and an A axis from which B's faces are projected onto A's
 
-_SIGNS = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], float)
 # The 6 faces of a box, index 2 k + (s > 0): normal axis k, side s; u, v are the in-plane axes.
 _K = np.repeat(np.arange(3), 2)
 _S = np.tile([-1.0, 1.0], 3)

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from psorr.box_batch import intersection_ratios
-from psorr.box_overlap import overlap_candidates
+from psorr.box_overlap import boxes_to_arrays, overlap_candidates
 from psorr.primitive_match import RADIUS_TOLERANCE
 from psorr.types import PrimitiveKind
 
@@ -43,10 +43,8 @@ class PrimitiveArrays:
     def of(cls, primitives) -> PrimitiveArrays:
         prims = list(primitives)
         plane = np.array([p.kind is PrimitiveKind.PLANE for p in prims], dtype=bool)
-        return cls(centers=np.array([p.box.center for p in prims]).reshape(-1, 3),
-                   rotations=np.array([p.box.rotation for p in prims]).reshape(-1, 3, 3),
-                   extents=np.array([p.box.extent for p in prims]).reshape(-1, 3),
-                   is_plane=plane,
+        centers, rotations, extents = boxes_to_arrays(p.box for p in prims)
+        return cls(centers=centers, rotations=rotations, extents=extents, is_plane=plane,
                    direction=np.array([p.normal if f else p.axis for p, f in zip(prims, plane)]).reshape(-1, 3),
                    radius=np.array([0.0 if f else p.radius for p, f in zip(prims, plane)]),
                    weight=np.array([p.n_points for p in prims], dtype=float))
