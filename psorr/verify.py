@@ -11,6 +11,7 @@ unknown (no measurement there).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 import open3d as o3d
@@ -20,6 +21,7 @@ from psorr.types import PointCloud
 
 KINECT_FOCAL = 525.0  # pixels of a 640-wide Kinect v1 image
 _SELF_BLOCK = 4  # pixels: model samples are sparser than pixels, so self-occlusion is judged per block
+_NORMAL_MARGIN = 0.03  # m of ICP-target normals kept beyond the crop that needed them
 
 
 @dataclass(frozen=True)
@@ -108,35 +110,54 @@ class SceneView:
                 plane = np.asarray(plane, float) / np.linalg.norm(plane[:3])
                 self.support_plane = plane if plane[3] > 0 else -plane  # origin on the positive side
                 keep[np.asarray(inliers)] = False
-        self._objects = down.select_by_index(np.flatnonzero(keep).tolist())
-        self.object_points = np.asarray(self._objects.points)
-        self.object_tree = o3d.geometry.KDTreeFlann(self._objects) if len(self.object_points) else None
+        self._object_mask = keep
         self.icp_voxel = icp_voxel
-        self._object_normals = self._target_normals = False
+        self._down_points = np.asarray(down.points)
+        self._normals = np.zeros_like(self._down_points)
+        self._has_normal = np.zeros(len(self._down_points), dtype=bool)
 
-    @property
+    @cached_property
     def objects(self) -> o3d.geometry.PointCloud:
-        """The downsampled points off the supporting plane, with normals facing the sensor
-        (estimated on first use: each estimate costs about as much as a whole decomposition step)."""
-        if not self._object_normals:
-            _estimate_normals(self._objects, 3 * self.icp_voxel, max_nn=20)
-            self._object_normals = True
-        return self._objects
+        """The downsampled points off the supporting plane, with normals facing the sensor: ORR's
+        scene samples. Built on first use, as PSORR never needs them."""
+        objects = self.down.select_by_index(np.flatnonzero(self._object_mask).tolist())
+        _estimate_normals(objects, 3 * self.icp_voxel, max_nn=20)
+        return objects
 
     @property
-    def icp_target(self) -> o3d.geometry.PointCloud:
-        """The downsampled cloud with normals facing the sensor: point-to-plane ICP's target.
+    def object_points(self) -> np.ndarray:
+        return np.asarray(self.objects.points)
 
-        The normals are estimated once, on first use, for the whole cloud: a scene's few dozen ICP
-        calls each estimating them on their own crop cost a quarter of recognition. Only the parts
-        and the table around them would need an estimate, and giving the rest of the table the
-        plane's exact normal is 100 ms faster, but ICP then settled the chassis turned end for end
-        more often (4 of 200 episode picks, against 1): not taken.
+    @cached_property
+    def object_tree(self) -> o3d.geometry.KDTreeFlann | None:
+        return o3d.geometry.KDTreeFlann(self.objects) if len(self.objects.points) else None
+
+    def icp_target(self, centre: np.ndarray, radius: float) -> o3d.geometry.PointCloud:
+        """The downsampled points within ``radius`` m of ``centre`` (3,), with normals facing the
+        sensor: point-to-plane ICP's target.
+
+        Normals come from up to 12 neighbours within 3 voxels, as one estimate over the whole cloud
+        would give them, but only where ICP looks: on a 640x480 scene the whole estimate costs more
+        than all ICP iterations, and most of the table is never a target. A region's normals are
+        estimated once, on a patch wide enough to hold every neighbour of every point they are kept
+        for, so they equal the whole-cloud estimate; later crops reuse them.
         """
-        if not self._target_normals:
-            _estimate_normals(self.down, 3 * self.icp_voxel, max_nn=12)
-            self._target_normals = True
-        return self.down
+        _, near, _ = self.down_tree.search_radius_vector_3d(centre, radius)
+        near = np.asarray(near, dtype=np.int64)
+        if not self._has_normal[near].all():
+            # Keep a margin beyond this crop: the next crop of the same part is rarely the same sphere.
+            keep_radius = radius + _NORMAL_MARGIN
+            _, wide, _ = self.down_tree.search_radius_vector_3d(centre, keep_radius + 3 * self.icp_voxel)
+            wide = np.sort(np.asarray(wide, dtype=np.int64))
+            patch = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(self._down_points[wide]))
+            _estimate_normals(patch, 3 * self.icp_voxel, max_nn=12)
+            inner = np.linalg.norm(self._down_points[wide] - centre, axis=1) <= keep_radius
+            fresh = inner & ~self._has_normal[wide]
+            self._normals[wide[fresh]] = np.asarray(patch.normals)[fresh]
+            self._has_normal[wide[fresh]] = True
+        target = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(self._down_points[near]))
+        target.normals = o3d.utility.Vector3dVector(self._normals[near])
+        return target
 
     @property
     def n_blocks(self) -> int:
@@ -218,10 +239,9 @@ def refine_icp(view: SceneView, model_points, model_normals, T_cloud_model, max_
     # A target cropped to the hypothesis keeps Open3D's per-call k-d tree small.
     centre = pts[visible].mean(axis=0)
     radius = reach + 0.5 * float(np.linalg.norm(np.ptp(pts[visible], axis=0)))
-    _, near, _ = view.down_tree.search_radius_vector_3d(centre, radius)
-    if len(near) < 10:
+    target = view.icp_target(centre, radius)
+    if len(target.points) < 10:
         return T_cloud_model
-    target = view.icp_target.select_by_index(list(near))
     source = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(pts[visible]))
     # Open3D sums ICP's normal equations across threads in whatever order they finish, so the last
     # bits of the pose, and everything a seeded episode does after it, would change from run to run.

@@ -25,19 +25,28 @@ def test_the_depth_buffer_keeps_the_nearest_point_of_each_pixel():
     np.testing.assert_array_equal(view.depth, nearest)
 
 
-def test_icp_target_normals_are_estimated_once_and_face_the_sensor():
+def test_icp_target_normals_equal_one_estimate_over_the_whole_cloud():
+    # They are estimated region by region, only where ICP looks, but must be what one estimate over
+    # the whole downsampled cloud gives, so ICP cannot tell the difference.
     scene = _scene(["chassis", "bushing"], 4)
     view = SceneView(scene.cloud)
-    target = view.icp_target
-    assert view.icp_target is target  # built once, shared by every ICP call of the scene
-    normals, points = np.asarray(target.normals), np.asarray(target.points)
-    assert len(normals) == len(points)
-    assert (np.linalg.norm(normals, axis=1) > 0.99).all()
-    assert (np.einsum("ij,ij->i", normals, -points) >= 0).all()  # towards the sensor at the origin
-    whole = o3d.geometry.PointCloud(target.points)
+    whole = o3d.geometry.PointCloud(view.down.points)
     whole.estimate_normals(o3d.geometry.KDTreeSearchParamHybrid(radius=3 * view.icp_voxel, max_nn=12))
     whole.orient_normals_towards_camera_location(np.zeros(3))
-    np.testing.assert_allclose(normals, np.asarray(whole.normals), atol=1e-9)
+    expected = {tuple(p): n for p, n in zip(np.asarray(whole.points), np.asarray(whole.normals))}
+    for inst in scene.instances:
+        for shift in ([0, 0, 0], [0.04, 0, 0], [0, -0.05, 0.01]):
+            centre = inst.T_camera_model[:3, 3] + shift
+            target = view.icp_target(centre, 0.08)
+            points, normals = np.asarray(target.points), np.asarray(target.normals)
+            assert len(points) > 100
+            assert (np.linalg.norm(points - centre, axis=1) <= 0.08 + 1e-12).all()
+            assert (np.einsum("ij,ij->i", normals, -points) >= 0).all()  # towards the sensor at the origin
+            # Open3D's own estimate is not exact where a point's two smallest spreads are nearly equal:
+            # reordering the whole cloud changes about 1 normal in 7000 there. So "equal" means almost all.
+            same = np.abs(normals - [expected[tuple(p)] for p in points]).max(axis=1) < 1e-9
+            assert same.mean() > 0.999, same.mean()
+    assert 0 < view._has_normal.mean() < 0.5  # the table far from the parts never needed normals
 
 
 def test_an_unorganised_whole_surface_cloud_does_not_look_seen_through_at_the_true_pose():
