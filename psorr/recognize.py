@@ -31,6 +31,7 @@ from psorr.orr import orr_hypotheses
 from psorr.pose_clusters import densest_poses
 from psorr.primitive_match import PrimitiveSizes
 from psorr.single_plane import SinglePlaneMatcher, SinglePlaneParams
+from psorr.support_crop import SupportCropParams, crop_to_parts
 from psorr.types import Detection, PointCloud, PrimitiveKind
 from psorr.verify import CheckParams, SceneView, check_pose, refine_icp
 
@@ -57,6 +58,7 @@ class RecognizeParams:
     min_support: int = 60
     max_shared_pixels: float = 0.3      # a detection sharing more of its pixels with a better one is dropped
     single_plane: SinglePlaneParams = field(default_factory=SinglePlaneParams)  # PSORR: poses from one face
+    support_crop: SupportCropParams = field(default_factory=SupportCropParams)  # PSORR: what is decomposed
 
     def __post_init__(self):
         for name in ("max_hypotheses", "refine_top", "pair_rounds", "orr_hypotheses", "min_support"):
@@ -107,6 +109,7 @@ def _scene_oriented_points(primitives, max_extent):
 
 
 _COARSE = CheckParams(max_points=300)
+_TABLE_EXTENT = 1.2  # in diameters of the largest model: a primitive larger than this is the table
 
 
 def _share_out(order, models, limit):
@@ -160,11 +163,14 @@ class Recognizer:
     def _psorr(self, cloud, view, rng):
         p = self.params
         t0 = time.perf_counter()
-        scene = decompose(cloud, p.decompose, rng)
+        # Only what stands on the table is decomposed, with a band of table around it that keeps the
+        # table larger than any model, so it still is not paired as a part's face.
+        cropped = crop_to_parts(cloud, view.support_plane, _TABLE_EXTENT / 2 * self.max_diameter, p.support_crop)
+        scene = decompose(cropped, p.decompose, rng)
         if p.leftover_voxel is not None:
-            scene = decompose_leftovers(cloud, scene, p.leftover_voxel, p.decompose, rng)
+            scene = decompose_leftovers(cropped, scene, p.leftover_voxel, p.decompose, rng)
         decomposition_ms = (time.perf_counter() - t0) * 1e3
-        pts, nrm, used = _scene_oriented_points(scene.primitives, 1.2 * self.max_diameter)
+        pts, nrm, used = _scene_oriented_points(scene.primitives, _TABLE_EXTENT * self.max_diameter)
         prims = [scene.primitives[k] for k in used]
         members = [cloud.points[scene.labels == k] for k in used]
         detections, claimed, n_hyp, verify_ms = [], None, 0, 0.0

@@ -1,0 +1,58 @@
+"""psorr.support_crop: the table far from the parts is left out of the decomposition."""
+
+import numpy as np
+import pytest
+import trimesh
+from scipy.spatial import cKDTree
+
+from psorr.errors import InvalidInputError
+from psorr.scenes import workpiece_scene
+from psorr.support_crop import SupportCropParams, crop_to_parts
+from psorr.types import PointCloud
+from psorr.verify import SceneView
+from psorr.workpieces import load_catalog
+
+
+def _scene(names, seed):
+    catalog = load_catalog()
+    return workpiece_scene(np.random.default_rng(seed), {n: catalog[n].load_mesh() for n in names}, names)
+
+
+def test_far_table_is_blanked_and_every_part_point_kept_in_place():
+    scene = _scene(["circuit_board"], 5)  # a thin board: only its components stand clear of the plane
+    plane = SceneView(scene.cloud).support_plane
+    margin = 0.09
+    cropped = crop_to_parts(scene.cloud, plane, margin)
+    before, after = np.isfinite(scene.cloud.points).all(axis=1), np.isfinite(cropped.points).all(axis=1)
+    assert (cropped.width, cropped.height) == (scene.cloud.width, scene.cloud.height)
+    assert not (after & ~before).any()
+    np.testing.assert_array_equal(cropped.points[after], scene.cloud.points[after])  # nothing moved
+    assert after.sum() < 0.2 * before.sum()  # most of a 640x480 frame is table
+    # The whole board, its flat top included, and table out to the margin along the plane stay.
+    surface, _ = trimesh.sample.sample_surface(load_catalog()["circuit_board"].load_mesh(), 5000, seed=0)
+    T = scene.instances[0].T_camera_model
+    gap, _ = cKDTree(surface @ T[:3, :3].T + T[:3, 3]).query(scene.cloud.points[before])
+    assert (gap < 0.004).sum() > 500
+    assert after[before][gap < 0.004].all()
+    # Table out to the margin (along the plane, so at least that far in space) of anything off it stays.
+    points = scene.cloud.points[before]
+    off = np.abs(points @ plane[:3] + plane[3]) > SupportCropParams().off_plane
+    reach, _ = cKDTree(points[off]).query(points)
+    assert after[before][reach < margin].all()
+    blanked = scene.cloud.points[before & ~after]
+    height = blanked @ plane[:3] + plane[3]
+    assert np.abs(height).max() <= SupportCropParams().off_plane  # only table is blanked
+
+
+def test_nothing_is_cropped_without_a_plane_or_when_disabled():
+    scene = _scene(["bracket"], 3)
+    plane = SceneView(scene.cloud).support_plane
+    assert crop_to_parts(scene.cloud, None, 0.09) is scene.cloud
+    assert crop_to_parts(scene.cloud, plane, 0.09, SupportCropParams(enabled=False)) is scene.cloud
+    flat = PointCloud(np.column_stack([np.random.default_rng(0).uniform(-0.3, 0.3, (500, 2)), np.ones(500)]))
+    assert crop_to_parts(flat, np.array([0.0, 0.0, -1.0, 1.0]), 0.09) is flat  # nothing stands on it
+
+
+def test_bad_crop_settings_are_refused():
+    with pytest.raises(InvalidInputError, match="off_plane"):
+        SupportCropParams(off_plane=0.0)
