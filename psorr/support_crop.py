@@ -25,7 +25,7 @@ class SupportCropParams:
     """Distances in metres."""
 
     enabled: bool = True
-    off_plane: float = 0.008  # a point farther than this from the supporting plane stands on it
+    off_plane: float = 0.008  # a point farther than this above the supporting plane stands on it
     cell: float = 0.01        # grid on the plane that the band is measured on
 
     def __post_init__(self):
@@ -36,17 +36,20 @@ class SupportCropParams:
 
 def crop_to_parts(cloud: PointCloud, plane: np.ndarray | None, margin: float,
                   params: SupportCropParams = SupportCropParams()) -> PointCloud:
-    """``cloud`` with the points of the supporting ``plane`` (a, b, c, d; unit normal) that lie more
-    than ``margin`` metres, along the plane, from anything off it made NaN. Point order stays, so
-    labels computed on the result index ``cloud``. Without a plane, or with nothing off it, the
-    cloud comes back unchanged."""
+    """``cloud`` with the points of the supporting ``plane`` (a, b, c, d; unit normal, the sensor on
+    its positive side) that lie more than ``margin`` metres, along the plane, from anything standing
+    on it, and every point below it, made NaN. Point order stays, so labels computed on the result
+    index ``cloud``. Without a plane, or with nothing standing on it, the cloud comes back unchanged."""
     if not params.enabled or plane is None:
         return cloud
     pts = cloud.points
     finite = np.flatnonzero(np.isfinite(pts).all(axis=1))
     normal = np.asarray(plane[:3], dtype=float)
-    off = np.abs(pts[finite] @ normal + plane[3]) > params.off_plane
-    if not off.any() or off.all():
+    height = pts[finite] @ normal + plane[3]
+    off = height > params.off_plane
+    # Below the plane (a floor seen past the table's edge) no part can be: it goes too.
+    below = height < -params.off_plane
+    if not off.any():
         return cloud
     # Grid coordinates along the plane: two axes orthogonal to its normal.
     u = np.cross(normal, [1.0, 0.0, 0.0] if abs(normal[0]) < 0.9 else [0.0, 1.0, 0.0])
@@ -58,7 +61,7 @@ def crop_to_parts(cloud: PointCloud, plane: np.ndarray | None, margin: float,
     reach = int(np.ceil(margin / params.cell)) + 1  # one cell more: a point may sit anywhere in its cell
     ring = np.hypot(*np.mgrid[-reach:reach + 1, -reach:reach + 1]) <= reach
     near = binary_dilation(occupied, structure=ring)
-    far = ~off & ~near[cells[:, 0], cells[:, 1]]
+    far = below | (~off & ~near[cells[:, 0], cells[:, 1]])
     if not far.any():
         return cloud
     cropped = pts.copy()

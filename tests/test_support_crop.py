@@ -39,9 +39,9 @@ def test_far_table_is_blanked_and_every_part_point_kept_in_place():
     off = np.abs(points @ plane[:3] + plane[3]) > SupportCropParams().off_plane
     reach, _ = cKDTree(points[off]).query(points)
     assert after[before][reach < margin].all()
-    blanked = scene.cloud.points[before & ~after]
-    height = blanked @ plane[:3] + plane[3]
-    assert np.abs(height).max() <= SupportCropParams().off_plane  # only table is blanked
+    height = scene.cloud.points @ plane[:3] + plane[3]
+    assert height[before & ~after].max() <= SupportCropParams().off_plane  # only the table, and what is under it
+    assert not after[before & (height < -SupportCropParams().off_plane)].any()  # no part can be below the table
 
 
 def test_nothing_is_cropped_without_a_plane_or_when_disabled():
