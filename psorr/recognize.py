@@ -54,6 +54,7 @@ class RecognizeParams:
     icp_distance: float = 0.012
     check: CheckParams = field(default_factory=CheckParams)
     min_visible_fraction: float = 0.35
+    min_unblocked_fraction: float = 0.6  # or, for a part partly hidden by others, of its unhidden points
     max_violation_ratio: float = 0.15
     min_support: int = 60
     max_shared_pixels: float = 0.3      # a detection sharing more of its pixels with a better one is dropped
@@ -70,7 +71,7 @@ class RecognizeParams:
         for name in ("cluster_cell", "box_thickness", "icp_distance"):
             if not getattr(self, name) > 0:
                 raise InvalidInputError(f"RecognizeParams.{name} must be > 0 metres, got {getattr(self, name)}")
-        for name in ("min_box_score", "min_visible_fraction", "max_violation_ratio", "max_shared_pixels"):
+        for name in ("min_box_score", "min_visible_fraction", "min_unblocked_fraction", "max_violation_ratio", "max_shared_pixels"):
             if not 0 <= getattr(self, name) <= 1:
                 raise InvalidInputError(f"RecognizeParams.{name} must lie in [0, 1], got {getattr(self, name)}")
 
@@ -274,8 +275,9 @@ class Recognizer:
                 continue
             T = refine_icp(view, model.points, model.normals, T, p.icp_distance / 3)
             check = check_pose(view, model.points, model.normals, T, p.check)
-            if (check.n_support >= p.min_support and check.visible_fraction >= p.min_visible_fraction
-                    and check.violation_ratio <= p.max_violation_ratio):
+            seen_enough = (check.visible_fraction >= p.min_visible_fraction
+                           or check.unblocked_fraction >= p.min_unblocked_fraction)
+            if check.n_support >= p.min_support and seen_enough and check.violation_ratio <= p.max_violation_ratio:
                 scored.append((check.score, model, T, check))
         scored.sort(key=lambda s: -s[0])
         if claimed is None:

@@ -48,6 +48,13 @@ class PoseCheck:
         return self.n_support / self.n_visible if self.n_visible else 0.0
 
     @property
+    def unblocked_fraction(self) -> float:
+        """Like visible_fraction, over only the points no nearer surface hides: a part behind others
+        is judged by what the sensor could see of it."""
+        open_ = self.n_visible - self.n_occluded
+        return self.n_support / open_ if open_ > 0 else 0.0
+
+    @property
     def violation_ratio(self) -> float:
         seen = self.n_support + self.n_violation
         return self.n_violation / seen if seen else 1.0

@@ -2,9 +2,10 @@
 
 import numpy as np
 import open3d as o3d
+import pytest
 
 from psorr.scenes import workpiece_scene
-from psorr.verify import SceneView
+from psorr.verify import PoseCheck, SceneView
 from psorr.workpieces import load_catalog
 
 
@@ -68,3 +69,13 @@ def test_an_unorganised_whole_surface_cloud_does_not_look_seen_through_at_the_tr
         cloud, T_camera_model = full_view(np.random.default_rng(seed), catalog["transformer"].load_mesh())
         check = check_pose(SceneView(cloud), model.points, model.normals, T_camera_model, CheckParams())
         assert check.violation_ratio < 0.1 and check.visible_fraction > 0.6, (seed, check.violation_ratio)
+
+
+def test_the_unblocked_fraction_leaves_out_what_nearer_surfaces_hide():
+    check = PoseCheck(n_visible=200, n_support=60, n_violation=5, n_occluded=100,
+                      supported_blocks=np.empty(0, dtype=np.int64))
+    assert check.visible_fraction == pytest.approx(0.3)
+    assert check.unblocked_fraction == pytest.approx(0.6)
+    hidden = PoseCheck(n_visible=50, n_support=0, n_violation=0, n_occluded=50,
+                       supported_blocks=np.empty(0, dtype=np.int64))
+    assert hidden.unblocked_fraction == 0.0
