@@ -9,8 +9,11 @@ small features (a window, a gland hole, a row of holes) that only a dense point 
 the centroid of its samples), each settled onto the model by ICP, that move its surface by little
 on average (an L bracket's legs swap about their bisector, a few degrees off its principal axes);
 exact symmetries qualify too, which is harmless. :func:`near_continuous_axis` finds an axis about which any turn
-is a near-symmetry (a flanged hub, whose yaw only its bolt holes fix). :class:`NearSymmetryResolver`
-re-fits each turned pose with ICP, or searches the turn about the axis, and keeps the pose whose
+is a near-symmetry (a flanged hub, whose yaw only its bolt holes fix). :func:`near_uniform_direction`
+finds a direction along which the part slides almost onto itself (a U-channel along its length, which
+only its two end faces fix): ICP cannot place such a part along it, and a pose from primitive pairs
+can start a centimetre or two off there. :class:`NearSymmetryResolver` re-fits each turned pose with
+ICP, searches the turn about the axis or the slide along the direction, and keeps the pose whose
 rendered depth (:mod:`psorr.depth_compare`) agrees best with the measurement where the candidates
 differ. When the features are hidden the poses cannot be told apart, and the original is kept.
 """
@@ -30,6 +33,11 @@ NEAR_MEAN_DISTANCE = 0.03  # x model diameter: turns moving the surface less tha
 EXACT_DISTANCE = 2e-4  # m: a turn moving no sample further than this from the mesh is an exact symmetry
 AXIS_TEST_DEGREES = (7.0, 19.0, 37.0, 90.0, 143.0)  # turns that must all be near-symmetries for a near-continuous axis
 AXIS_COARSE_DEG, AXIS_FINE_DEG = 4.0, 0.5
+# A slide by TEST_SHIFT x diameter that moves the surface by less than UNIFORM_LIMIT x the slide on average
+# (90% of the surface slides onto itself) makes a direction near-uniform; slides are searched up to
+# SLIDE_REACH x diameter, in SLIDE_COARSE steps, then SLIDE_FINE steps around the best.
+TEST_SHIFT, UNIFORM_LIMIT = 0.05, 0.1
+SLIDE_REACH, SLIDE_COARSE, SLIDE_FINE = 0.16, 0.02, 0.005
 DENSE_CHECK = CheckParams(max_points=6000)
 # A turned pose replaces the original only when its residual is clearly lower; when the features
 # that tell them apart are hidden the residuals tie, and recognition's own choice stands.
@@ -116,7 +124,20 @@ def near_continuous_axis(model, renderer: DepthRenderer,
     return best
 
 
-# A model's near-symmetries (turns, axis), by model object: Models are immutable.
+def near_uniform_direction(model, renderer: DepthRenderer) -> np.ndarray | None:
+    """The unit direction (3,), model frame, among the principal axes of ``model``'s samples, along
+    which a slide by TEST_SHIFT x diameter moves its surface least, if that is below UNIFORM_LIMIT x
+    the slide on average; else None. Of the catalog only the U-channel has one (0.06); the chassis,
+    whose end walls fix it, and the circuit board come next at 0.16 and 0.13."""
+    points = model.points[:: max(1, len(model.points) // 1500)]
+    _, axes = np.linalg.eigh(np.cov((points - points.mean(axis=0)).T))
+    shift = TEST_SHIFT * model.diameter
+    moved = np.array([renderer.distance(points + shift * axis).mean() for axis in axes.T]) / shift
+    k = int(np.argmin(moved))
+    return axes[:, k] if moved[k] < UNIFORM_LIMIT else None
+
+
+# A model's near-symmetries (turns, axis, slide direction), by model object: Models are immutable.
 _FOUND: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
@@ -141,13 +162,16 @@ class NearSymmetryResolver:
         found = _FOUND.get(model)
         if found is None:  # about 0.1 s a model, so once per model object however many recognizers use it
             found = _FOUND[model] = (near_symmetries(model.points, model.diameter),
-                                     near_continuous_axis(model, self.renderer))
-        self.turns, self.axis = found
+                                     near_continuous_axis(model, self.renderer),
+                                     near_uniform_direction(model, self.renderer))
+        self.turns, self.axis, self.slide = found
         self._centre = model.points.mean(axis=0)
 
     def resolve(self, view: SceneView, T_cloud_model: np.ndarray, icp_distance: float) -> tuple[np.ndarray, PoseCheck]:
         """The best pose (4, 4) and its dense :class:`PoseCheck`."""
         T = T_cloud_model
+        if self.slide is not None:
+            T = self._best_slide(view, T)
         if self.axis is not None:
             T = self._best_turn_about_axis(view, T)
         if len(self.turns):
@@ -176,6 +200,23 @@ class NearSymmetryResolver:
         fine = np.concatenate([[0.0], best + np.arange(-AXIS_COARSE_DEG, AXIS_COARSE_DEG + 1e-9, AXIS_FINE_DEG)])
         poses = self._about_axis(T, fine)
         return poses[int(np.argmin(self._costs(view, poses)))]
+
+    def _slid(self, T: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+        poses = np.repeat(T[None], len(offsets), axis=0)
+        poses[:, :3, 3] += np.outer(offsets * self.model.diameter, T[:3, :3] @ self.slide)
+        return poses
+
+    def _best_slide(self, view: SceneView, T: np.ndarray) -> np.ndarray:
+        coarse = np.arange(-SLIDE_REACH, SLIDE_REACH + 1e-9, SLIDE_COARSE)
+        poses = self._slid(T, np.concatenate([[0.0], coarse]))  # the pose found comes first: costs differ from it
+        costs = self._costs(view, poses)
+        best = coarse[int(np.argmin(costs[1:]))]
+        fine = np.concatenate([[0.0], best + np.arange(-SLIDE_COARSE, SLIDE_COARSE + 1e-9, SLIDE_FINE)])
+        poses = self._slid(T, fine)
+        costs = self._costs(view, poses)
+        k = int(np.argmin(costs))
+        # As with the turns: a slide must clearly lower the residual, or the end faces are hidden.
+        return poses[k] if costs[k] < SWITCH_RATIO * costs[0] else T
 
     def _best_half_turn(self, view: SceneView, T: np.ndarray, icp_distance: float) -> np.ndarray:
         m = self.model

@@ -1,10 +1,10 @@
-"""Near-symmetries (psorr/ambiguity.py): the chassis turned end for end is told from the chassis, and
-the flanged hub's yaw is found from its bolt holes."""
+"""Near-symmetries (psorr/ambiguity.py): the chassis turned end for end is told from the chassis, the
+flanged hub's yaw is found from its bolt holes, and the U-channel's place along its length from its ends."""
 
 import numpy as np
 import pytest
 
-from psorr.ambiguity import NearSymmetryResolver, near_symmetries
+from psorr.ambiguity import NearSymmetryResolver, near_symmetries, near_uniform_direction
 from psorr.library import ModelLibrary
 from psorr.scenes import workpiece_scene
 from psorr.verify import SceneView
@@ -17,7 +17,7 @@ def parts(tmp_path_factory):
 
     os.environ["PSORR_CACHE"] = str(tmp_path_factory.mktemp("cache"))
     catalog = load_catalog()
-    names = ["bracket", "bushing", "chassis", "flanged_hub"]
+    names = ["bracket", "bushing", "chassis", "flanged_hub", "u_channel"]
     library = ModelLibrary.from_meshes([catalog[n].mesh_path for n in names])
     return catalog, library, {n: catalog[n].load_mesh() for n in names}
 
@@ -84,3 +84,38 @@ def test_the_hubs_yaw_is_found_from_its_bolt_holes(parts, seed, degrees):
     T, _ = resolver.resolve(SceneView(scene.cloud), T_true @ turn, 0.01)
     errors = [_angle_deg(T[:3, :3].T @ (T_true @ S)[:3, :3]) for S in catalog["flanged_hub"].symmetries]
     assert min(errors) < 2.0
+
+
+def test_only_the_u_channel_slides_almost_onto_itself(parts):
+    """The U-channel (120 mm long, model x) is the same channel slid along its length but for its two
+    end faces; every other part's faces across each of its axes fix it there, for ICP to see."""
+    _, library, _ = parts
+    directions = {m.name: near_uniform_direction(m, NearSymmetryResolver(m).renderer) for m in library.models}
+    assert all(d is None for name, d in directions.items() if name != "u_channel")
+    assert abs(directions["u_channel"][0]) > 0.999
+
+
+@pytest.mark.parametrize("seed, shift", [(0, 0.015), (1, -0.02), (2, 0.008)])
+def test_the_u_channels_place_along_its_length_is_found_from_its_ends(parts, seed, shift):
+    """Start from the true pose slid along the channel's length: render and compare slides it back to
+    within 2 mm (ICP would not: the channel's long faces do not change along it)."""
+    _, library, meshes = parts
+    scene = workpiece_scene(np.random.default_rng(seed), meshes, ["u_channel"])
+    resolver = NearSymmetryResolver(library.model("u_channel"))
+    T_true = scene.instances[0].T_camera_model
+    slid = T_true.copy()
+    slid[:3, 3] += shift * T_true[:3, 0]
+    T, _ = resolver.resolve(SceneView(scene.cloud), slid, 0.01)
+    assert np.linalg.norm(T[:3, 3] - T_true[:3, 3]) < 0.002
+
+
+def test_a_hidden_end_leaves_the_u_channel_where_it_was(parts):
+    """With the scene showing nothing of the channel (an empty table), no slide is clearly better, and
+    the pose given is kept as it is."""
+    _, library, meshes = parts
+    scene = workpiece_scene(np.random.default_rng(0), meshes, ["u_channel"])
+    resolver = NearSymmetryResolver(library.model("u_channel"))
+    T_far = scene.instances[0].T_camera_model.copy()
+    T_far[:3, 3] += [0.0, 0.0, -0.3]  # floating 30 cm nearer the sensor, over the channel
+    T, _ = resolver.resolve(SceneView(scene.cloud), T_far, 0.01)
+    assert np.array_equal(T[:3, 3], T_far[:3, 3])
