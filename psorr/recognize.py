@@ -8,7 +8,9 @@ how each is screened:
   (its leftover points decomposed again, finer), clusters the poses by
   vote, and screens each by intersecting model and scene primitive boxes
   (section 2.1.4). Once detections explain some parts, it pairs again among
-  the primitives they leave unexplained, then tries single faces.
+  the primitives they leave unexplained, then tries single faces. Points still
+  standing on the table unexplained, in part-sized groups, are decomposed again
+  at a finer voxel and searched the same way.
 - ORR (Papazov and Burschka) pairs random oriented scene points and screens
   every hypothesis with the point-level check.
 """
@@ -16,80 +18,26 @@ how each is screened:
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.spatial import cKDTree
 
 from psorr.ambiguity import NearSymmetryResolver
 from psorr.box_score import PrimitiveArrays, box_scores
-from psorr.decomposition import DecomposeParams, decompose
+from psorr.decomposition import decompose
 from psorr.decomposition.detail import decompose_leftovers
 from psorr.errors import InvalidInputError
 from psorr.library import ModelLibrary
 from psorr.orr import orr_hypotheses
 from psorr.pose_clusters import densest_poses
 from psorr.primitive_match import PrimitiveSizes
-from psorr.single_plane import SinglePlaneMatcher, SinglePlaneParams
-from psorr.support_crop import SupportCropParams, crop_to_parts
+from psorr.recognize_params import METHODS, Recognition, RecognitionStats, RecognizeParams
+from psorr.single_plane import SinglePlaneMatcher
+from psorr.support_crop import crop_to_parts
 from psorr.types import Detection, PointCloud, PrimitiveKind
+from psorr.unexplained import part_sized, standing_unexplained, without_explained
 from psorr.verify import CheckParams, SceneView, check_pose, refine_icp
-
-METHODS = ("psorr", "orr")
-
-
-@dataclass(frozen=True)
-class RecognizeParams:
-    """Settings of recognition; distances in metres."""
-
-    decompose: DecomposeParams = field(default_factory=lambda: DecomposeParams(voxel_size=0.008))
-    leftover_voxel: float | None = 0.005  # PSORR: points the decomposition left unlabelled, again at this voxel
-    max_hypotheses: int = 100           # PSORR: clustered hypotheses screened by boxes, per round
-    cluster_cell: float = 0.02          # PSORR: position grid of the vote clustering
-    min_box_score: float = 0.1
-    box_thickness: float = 0.04         # boxes are thickened to this: pair poses are off by a centimetre or so
-    refine_top: int = 24                # best screened hypotheses that get ICP and the point check
-    pair_rounds: int = 2                # PSORR: pairing again among the primitives detections leave unexplained
-    orr_hypotheses: int = 1500          # ORR: hypotheses drawn and checked point by point
-    icp_distance: float = 0.012
-    check: CheckParams = field(default_factory=CheckParams)
-    min_visible_fraction: float = 0.35
-    min_unblocked_fraction: float = 0.6  # or, for a part partly hidden by others, of its unhidden points
-    max_violation_ratio: float = 0.15
-    min_support: int = 60
-    max_shared_pixels: float = 0.3      # a detection sharing more of its pixels with a better one is dropped
-    single_plane: SinglePlaneParams = field(default_factory=SinglePlaneParams)  # PSORR: poses from one face
-    support_crop: SupportCropParams = field(default_factory=SupportCropParams)  # PSORR: what is decomposed
-
-    def __post_init__(self):
-        for name in ("max_hypotheses", "refine_top", "pair_rounds", "orr_hypotheses", "min_support"):
-            if int(getattr(self, name)) < 1:
-                raise InvalidInputError(f"RecognizeParams.{name} must be >= 1, got {getattr(self, name)}")
-        if self.leftover_voxel is not None and not self.leftover_voxel > 0:
-            raise InvalidInputError(f"RecognizeParams.leftover_voxel must be > 0 metres or None, "
-                                    f"got {self.leftover_voxel}")
-        for name in ("cluster_cell", "box_thickness", "icp_distance"):
-            if not getattr(self, name) > 0:
-                raise InvalidInputError(f"RecognizeParams.{name} must be > 0 metres, got {getattr(self, name)}")
-        for name in ("min_box_score", "min_visible_fraction", "min_unblocked_fraction", "max_violation_ratio", "max_shared_pixels"):
-            if not 0 <= getattr(self, name) <= 1:
-                raise InvalidInputError(f"RecognizeParams.{name} must lie in [0, 1], got {getattr(self, name)}")
-
-
-@dataclass(frozen=True)
-class RecognitionStats:
-    method: str
-    hypotheses: int
-    verify_ms_per_hypothesis: float
-    decomposition_ms: float
-    total_ms: float
-    train_ms: float
-
-
-@dataclass(frozen=True)
-class Recognition:
-    detections: tuple[Detection, ...]
-    stats: RecognitionStats
 
 
 def _scene_oriented_points(primitives, max_extent):
@@ -125,6 +73,22 @@ def _share_out(order, models, limit):
             if queue and len(chosen) < limit:
                 chosen.append(queue.pop(0))
     return chosen
+
+
+@dataclass
+class _Tally:
+    """What one recognize() call has found so far, and its cost."""
+
+    decomposition_ms: float = 0.0
+    detections: list = field(default_factory=list)
+    claimed: np.ndarray | None = None  # 4x4-pixel blocks the detections explain
+    hypotheses: int = 0
+    verify_ms: float = 0.0
+
+    def add(self, detections, hypotheses: int, verify_ms: float) -> None:
+        self.detections += detections
+        self.hypotheses += hypotheses
+        self.verify_ms += verify_ms
 
 
 class Recognizer:
@@ -166,23 +130,44 @@ class Recognizer:
         t0 = time.perf_counter()
         # Only what stands on the table is decomposed, with a band of table around it that keeps the
         # table larger than any model, so it still is not paired as a part's face.
-        cropped = crop_to_parts(cloud, view.support_plane, _TABLE_EXTENT / 2 * self.max_diameter, p.support_crop)
+        margin = _TABLE_EXTENT / 2 * self.max_diameter
+        cropped = crop_to_parts(cloud, view.support_plane, margin, p.support_crop)
         scene = decompose(cropped, p.decompose, rng)
         if p.leftover_voxel is not None:
             scene = decompose_leftovers(cropped, scene, p.leftover_voxel, p.decompose, rng)
-        decomposition_ms = (time.perf_counter() - t0) * 1e3
+        tally = _Tally(decomposition_ms=(time.perf_counter() - t0) * 1e3)
+        self._search(cloud, view, scene, tally)
+        if p.fine_voxel is not None:
+            # What stands on the table and no detection explains gets a second look, decomposed finer.
+            off = p.support_crop.off_plane
+            rest = standing_unexplained(cropped, view.support_plane, tally.detections, self._model_trees,
+                                        p.icp_distance / 2, off)
+            rest = part_sized(cropped, view.support_plane, rest, _TABLE_EXTENT * self.max_diameter)
+            if rest.sum() >= p.min_unexplained:
+                t0 = time.perf_counter()
+                left = crop_to_parts(without_explained(cropped, view.support_plane, rest, off), view.support_plane,
+                                     margin, p.support_crop)
+                fine = decompose(left, replace(p.decompose, voxel_size=p.fine_voxel), rng)
+                tally.decomposition_ms += (time.perf_counter() - t0) * 1e3
+                self._search(cloud, view, fine, tally)
+        return tally.detections, tally.hypotheses, tally.verify_ms, tally.decomposition_ms
+
+    def _search(self, cloud, view, scene, tally: _Tally) -> None:
+        """Pair rounds, then single faces, over the primitives of the decomposition ``scene``; what
+        they find, and what it cost, is added to ``tally``."""
+        p = self.params
         pts, nrm, used = _scene_oriented_points(scene.primitives, _TABLE_EXTENT * self.max_diameter)
         prims = [scene.primitives[k] for k in used]
         members = [cloud.points[scene.labels == k] for k in used]
-        detections, claimed, n_hyp, verify_ms = [], None, 0, 0.0
-        open_ = np.ones(len(used), dtype=bool)  # primitives no detection explains yet
+        # Primitives no detection explains yet; those an earlier search's detections explain are out.
+        open_ = np.array([not self._on_detected_surface(tally.detections, m) for m in members], dtype=bool)
         for _ in range(p.pair_rounds):
             # In clutter, pairs across other parts fill a model's hypothesis quota; once those parts are
             # explained, their primitives leave the pairing and a part with few votes gets its turn.
             keep = np.flatnonzero(open_)
             candidates, n, ms = self._pair_candidates(pts[keep], nrm[keep], [prims[k] for k in keep])
-            more, claimed = self._accept(view, candidates, claimed)
-            detections, n_hyp, verify_ms = detections + more, n_hyp + n, verify_ms + ms
+            more, tally.claimed = self._accept(view, candidates, tally.claimed)
+            tally.add(more, n, ms)
             open_ &= [not self._on_detected_surface(more, m) for m in members]
             if not more or open_.sum() < 2:
                 break
@@ -193,10 +178,8 @@ class Recognizer:
             faces = [prims[k] for k in np.flatnonzero(open_) if prims[k].kind is PrimitiveKind.PLANE]
             face_poses, face_models = self._single_plane.hypotheses(faces)
             face_candidates = self._best_face_poses(view, face_poses, face_models)
-            n_hyp, verify_ms = n_hyp + len(face_poses), verify_ms + (time.perf_counter() - t1) * 1e3
-            more, claimed = self._accept(view, face_candidates, claimed)
-            detections += more
-        return detections, n_hyp, verify_ms, decomposition_ms
+            more, tally.claimed = self._accept(view, face_candidates, tally.claimed)
+            tally.add(more, len(face_poses), (time.perf_counter() - t1) * 1e3)
 
     def _on_detected_surface(self, detections, points: np.ndarray, share: float = 0.5) -> bool:
         """Does at least ``share`` of ``points`` (M, 3), a primitive's, lie on the surface of one of ``detections``

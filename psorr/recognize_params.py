@@ -1,0 +1,73 @@
+"""Settings and results of recognition (psorr.recognize)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from psorr.decomposition import DecomposeParams
+from psorr.errors import InvalidInputError
+from psorr.single_plane import SinglePlaneParams
+from psorr.support_crop import SupportCropParams
+from psorr.types import Detection
+from psorr.verify import CheckParams
+
+METHODS = ("psorr", "orr")
+
+
+@dataclass(frozen=True)
+class RecognizeParams:
+    """Settings of recognition; distances in metres."""
+
+    decompose: DecomposeParams = field(default_factory=lambda: DecomposeParams(voxel_size=0.008))
+    leftover_voxel: float | None = 0.005  # PSORR: points the decomposition left unlabelled, again at this voxel
+    fine_voxel: float | None = 0.005    # PSORR: what stands unexplained after the search, decomposed again
+    min_unexplained: int = 100          # PSORR: ... if at least this many points (a detection needs min_support)
+    max_hypotheses: int = 100           # PSORR: clustered hypotheses screened by boxes, per round
+    cluster_cell: float = 0.02          # PSORR: position grid of the vote clustering
+    min_box_score: float = 0.1
+    box_thickness: float = 0.04         # boxes are thickened to this: pair poses are off by a centimetre or so
+    refine_top: int = 24                # best screened hypotheses that get ICP and the point check
+    pair_rounds: int = 2                # PSORR: pairing again among the primitives detections leave unexplained
+    orr_hypotheses: int = 1500          # ORR: hypotheses drawn and checked point by point
+    icp_distance: float = 0.012
+    check: CheckParams = field(default_factory=CheckParams)
+    min_visible_fraction: float = 0.35
+    min_unblocked_fraction: float = 0.6  # or, for a part partly hidden by others, of its unhidden points
+    max_violation_ratio: float = 0.15
+    min_support: int = 60
+    max_shared_pixels: float = 0.3      # a detection sharing more of its pixels with a better one is dropped
+    single_plane: SinglePlaneParams = field(default_factory=SinglePlaneParams)  # PSORR: poses from one face
+    support_crop: SupportCropParams = field(default_factory=SupportCropParams)  # PSORR: what is decomposed
+
+    def __post_init__(self):
+        for name in ("max_hypotheses", "refine_top", "pair_rounds", "orr_hypotheses", "min_support",
+                     "min_unexplained"):
+            if int(getattr(self, name)) < 1:
+                raise InvalidInputError(f"RecognizeParams.{name} must be >= 1, got {getattr(self, name)}")
+        for name in ("leftover_voxel", "fine_voxel"):
+            if getattr(self, name) is not None and not getattr(self, name) > 0:
+                raise InvalidInputError(f"RecognizeParams.{name} must be > 0 metres or None, "
+                                        f"got {getattr(self, name)}")
+        for name in ("cluster_cell", "box_thickness", "icp_distance"):
+            if not getattr(self, name) > 0:
+                raise InvalidInputError(f"RecognizeParams.{name} must be > 0 metres, got {getattr(self, name)}")
+        for name in ("min_box_score", "min_visible_fraction", "min_unblocked_fraction", "max_violation_ratio",
+                     "max_shared_pixels"):
+            if not 0 <= getattr(self, name) <= 1:
+                raise InvalidInputError(f"RecognizeParams.{name} must lie in [0, 1], got {getattr(self, name)}")
+
+
+@dataclass(frozen=True)
+class RecognitionStats:
+    method: str
+    hypotheses: int
+    verify_ms_per_hypothesis: float
+    decomposition_ms: float
+    total_ms: float
+    train_ms: float
+
+
+@dataclass(frozen=True)
+class Recognition:
+    detections: tuple[Detection, ...]
+    stats: RecognitionStats
