@@ -2,9 +2,8 @@
 scored by the symmetry-aware ADD (correct under 0.1 x the model diameter).
 
 The recall tests assert the issue's correctness bar: single parts are
-recognised (16/16 today on these seeds; one miss is allowed), and clutter
-recall is at least 0.8 with at most one false positive per scene (20/24 and
-none today). The benchmark's harder set, with an occluder, is in
+recognised, and clutter recall is at least 0.8 with at most one false
+positive per scene. The benchmark's harder set, with an occluder, is in
 benchmarks/peers.py.
 """
 
@@ -55,9 +54,9 @@ def _score(scene, detections, library, catalog):
 
 def test_single_parts_are_recognised(library, catalog):
     # Three seeded scenes per catalog part, the flat circuit board and the small bushing included. A small
-    # part's few faces make its decomposition, and so its recognition, hinge on the random draws: over 24
-    # scenes x 5 recognizer seeds, 109 of 120 succeed (0.91). 24 scenes, not 16, so one unlucky draw does
-    # not decide the test.
+    # part's few faces make its decomposition, and so its recognition, hinge on the random draws: over these
+    # 24 scenes x 5 recognizer seeds, 118 of 120 succeed (0.98; 110 without the finer second look). 24
+    # scenes, not 16, so one unlucky draw does not decide the test.
     found = false = total = 0
     for k, name in enumerate(sorted(catalog)):
         for s in range(3):
@@ -67,9 +66,12 @@ def test_single_parts_are_recognised(library, catalog):
             found, false, total = found + f, false + fp, total + 1
             for det in result.detections:
                 assert 0 < det.score <= 1 and 0 < det.visible_fraction <= 1
-            params = RecognizeParams()  # pair clusters each round, plus poses from single faces left unexplained
-            assert result.stats.hypotheses <= params.pair_rounds * params.max_hypotheses + params.single_plane.max_poses
-    assert found >= 0.85 * total, f"single-part recall {found}/{total}"
+            # Per search (the first, and the finer second look), pair clusters each round plus poses from
+            # single faces left unexplained.
+            params = RecognizeParams()
+            per_search = params.pair_rounds * params.max_hypotheses + params.single_plane.max_poses
+            assert result.stats.hypotheses <= 2 * per_search
+    assert found >= 0.95 * total, f"single-part recall {found}/{total}"
     assert false <= 2, f"{false} false positives in {total} single-part scenes"
 
 
