@@ -178,8 +178,9 @@ class Recognizer:
             faces = [prims[k] for k in np.flatnonzero(open_) if prims[k].kind is PrimitiveKind.PLANE]
             face_poses, face_models = self._single_plane.hypotheses(faces)
             face_candidates = self._best_face_poses(view, face_poses, face_models)
+            ms = (time.perf_counter() - t1) * 1e3  # screening only, like the pairs' box time; not acceptance
             more, tally.claimed = self._accept(view, face_candidates, tally.claimed)
-            tally.add(more, len(face_poses), (time.perf_counter() - t1) * 1e3)
+            tally.add(more, len(face_poses), ms)
 
     def _on_detected_surface(self, detections, points: np.ndarray, share: float = 0.5) -> bool:
         """Does at least ``share`` of ``points`` (M, 3), a primitive's, lie on the surface of one of ``detections``
