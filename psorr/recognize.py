@@ -182,6 +182,17 @@ class Recognizer:
             more, tally.claimed = self._accept(view, face_candidates, tally.claimed)
             tally.add(more, len(face_poses), ms)
 
+    def _floats(self, view, model, T_cloud_model) -> bool:
+        """Is the model's lowest point more than max_float above the supporting plane? Parts rest on the
+        table: a plate can lie on an arm reaching across the view, within the depth tolerance of its 35 mm
+        radius over most of its width, and no check on the measured surface tells it from a real one.
+        Stacked parts need max_float=None."""
+        if self.params.max_float is None or view.support_plane is None:
+            return False
+        plane = view.support_plane
+        lowest = (model.points[::4] @ T_cloud_model[:3, :3].T + T_cloud_model[:3, 3]) @ plane[:3] + plane[3]
+        return bool(lowest.min() > self.params.max_float)
+
     def _on_detected_surface(self, detections, points: np.ndarray, share: float = 0.5) -> bool:
         """Does at least ``share`` of ``points`` (M, 3), a primitive's, lie on the surface of one of ``detections``
         (within half the ICP distance of its model's samples)? The whole surface, not the pixels it covers: a
@@ -261,7 +272,8 @@ class Recognizer:
             check = check_pose(view, model.points, model.normals, T, p.check)
             seen_enough = (check.visible_fraction >= p.min_visible_fraction
                            or check.unblocked_fraction >= p.min_unblocked_fraction)
-            if check.n_support >= p.min_support and seen_enough and check.violation_ratio <= p.max_violation_ratio:
+            if (check.n_support >= p.min_support and seen_enough and check.violation_ratio <= p.max_violation_ratio
+                    and not self._floats(view, model, T)):
                 scored.append((check.score, model, T, check))
         scored.sort(key=lambda s: -s[0])
         if claimed is None:

@@ -35,6 +35,7 @@ class RecognizeParams:
     min_unblocked_fraction: float = 0.6  # or, for a part partly hidden by others, of its unhidden points
     max_violation_ratio: float = 0.15
     min_support: int = 60
+    max_float: float | None = 0.02      # a part's lowest point this far above the supporting plane is no part
     max_shared_pixels: float = 0.3      # a detection sharing more of its pixels with a better one is dropped
     single_plane: SinglePlaneParams = field(default_factory=SinglePlaneParams)  # PSORR: poses from one face
     support_crop: SupportCropParams = field(default_factory=SupportCropParams)  # PSORR: what is decomposed
@@ -44,7 +45,7 @@ class RecognizeParams:
                      "min_unexplained"):
             if int(getattr(self, name)) < 1:
                 raise InvalidInputError(f"RecognizeParams.{name} must be >= 1, got {getattr(self, name)}")
-        for name in ("leftover_voxel", "fine_voxel"):
+        for name in ("leftover_voxel", "fine_voxel", "max_float"):
             if getattr(self, name) is not None and not getattr(self, name) > 0:
                 raise InvalidInputError(f"RecognizeParams.{name} must be > 0 metres or None, "
                                         f"got {getattr(self, name)}")
