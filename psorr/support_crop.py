@@ -34,6 +34,15 @@ class SupportCropParams:
                 raise InvalidInputError(f"SupportCropParams.{name} must be > 0 metres, got {getattr(self, name)}")
 
 
+def along_plane(points: np.ndarray, plane: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Coordinates (N, 2) of ``points`` (N, 3) along the ``plane`` (a, b, c, d; unit normal), on two axes
+    orthogonal to its normal, and their heights (N,) above it; metres."""
+    normal = np.asarray(plane[:3], dtype=float)
+    u = np.cross(normal, [1.0, 0.0, 0.0] if abs(normal[0]) < 0.9 else [0.0, 1.0, 0.0])
+    u /= np.linalg.norm(u)
+    return points @ np.column_stack([u, np.cross(normal, u)]), points @ normal + plane[3]
+
+
 def crop_to_parts(cloud: PointCloud, plane: np.ndarray | None, margin: float,
                   params: SupportCropParams = SupportCropParams()) -> PointCloud:
     """``cloud`` with the points of the supporting ``plane`` (a, b, c, d; unit normal, the sensor on
@@ -44,17 +53,12 @@ def crop_to_parts(cloud: PointCloud, plane: np.ndarray | None, margin: float,
         return cloud
     pts = cloud.points
     finite = np.flatnonzero(np.isfinite(pts).all(axis=1))
-    normal = np.asarray(plane[:3], dtype=float)
-    height = pts[finite] @ normal + plane[3]
+    along, height = along_plane(pts[finite], plane)
     off = height > params.off_plane
     # Below the plane (a floor seen past the table's edge) no part can be: it goes too.
     below = height < -params.off_plane
     if not off.any():
         return cloud
-    # Grid coordinates along the plane: two axes orthogonal to its normal.
-    u = np.cross(normal, [1.0, 0.0, 0.0] if abs(normal[0]) < 0.9 else [0.0, 1.0, 0.0])
-    u /= np.linalg.norm(u)
-    along = pts[finite] @ np.column_stack([u, np.cross(normal, u)])
     cells = np.floor((along - along.min(axis=0)) / params.cell).astype(np.int64)
     occupied = np.zeros(cells.max(axis=0) + 1, dtype=bool)
     occupied[cells[off, 0], cells[off, 1]] = True

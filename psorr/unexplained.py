@@ -12,7 +12,17 @@ from dataclasses import replace
 import numpy as np
 from scipy.ndimage import label
 
+from psorr.support_crop import along_plane
 from psorr.types import PointCloud
+
+
+def _standing(points: np.ndarray, plane: np.ndarray | None, off_plane: float) -> np.ndarray:
+    """(N,) bool: finite, and more than ``off_plane`` metres above the plane (every finite point without one)."""
+    finite = np.isfinite(points).all(axis=1)
+    standing = finite.copy()
+    if plane is not None:
+        standing[finite] = points[finite] @ np.asarray(plane[:3]) + plane[3] > off_plane
+    return standing
 
 
 def standing_unexplained(cloud: PointCloud, plane: np.ndarray | None, detections, model_trees: dict,
@@ -22,10 +32,7 @@ def standing_unexplained(cloud: PointCloud, plane: np.ndarray | None, detections
     the surface samples of every detection's model (``model_trees``: name -> cKDTree of the samples,
     model frame)."""
     pts = cloud.points
-    finite = np.isfinite(pts).all(axis=1)
-    mask = finite.copy()
-    if plane is not None:
-        mask[finite] = pts[finite] @ np.asarray(plane[:3]) + plane[3] > off_plane
+    mask = _standing(pts, plane, off_plane)
     for d in detections:
         index = np.flatnonzero(mask)
         if len(index) == 0:
@@ -44,12 +51,7 @@ def part_sized(cloud: PointCloud, plane: np.ndarray | None, mask: np.ndarray, la
     wider along it than ``largest`` metres. An arm reaching across the table is neither."""
     if plane is None or not mask.any():
         return mask
-    pts = cloud.points[mask]
-    normal = np.asarray(plane[:3], dtype=float)
-    height = pts @ normal + plane[3]
-    u = np.cross(normal, [1.0, 0.0, 0.0] if abs(normal[0]) < 0.9 else [0.0, 1.0, 0.0])
-    u /= np.linalg.norm(u)
-    along = pts @ np.column_stack([u, np.cross(normal, u)])
+    along, height = along_plane(cloud.points[mask], plane)
     cells = np.floor((along - along.min(axis=0)) / cell).astype(np.int64)
     grid = np.zeros(cells.max(axis=0) + 1, dtype=bool)
     grid[cells[:, 0], cells[:, 1]] = True
@@ -70,11 +72,7 @@ def without_explained(cloud: PointCloud, plane: np.ndarray | None, unexplained: 
     """``cloud`` with its standing points that are not ``unexplained`` made NaN (point order kept, so
     labels computed on the result index ``cloud``); the table's points stay."""
     pts = cloud.points
-    finite = np.isfinite(pts).all(axis=1)
-    standing = finite.copy()
-    if plane is not None:
-        standing[finite] = pts[finite] @ np.asarray(plane[:3]) + plane[3] > off_plane
-    blank = standing & ~unexplained
+    blank = _standing(pts, plane, off_plane) & ~unexplained
     if not blank.any():
         return cloud
     out = pts.copy()
