@@ -6,7 +6,9 @@ higher than any resting workpiece stands (plus a margin) are something that does
 there. Two things are filtered out first, both from the robot's knowledge of itself: its own
 arm (the pixels where its model, rendered at the known joint angles, lies; that is what the
 segmentation render's arm pixels are) and, while it holds one, the part in its hand (a ball
-around the tool of the part's size).
+around the tool of the part's size). PSORR is also spared the fixtures' pixels: the robot knows
+where the fixtures stand, since it places parts into them, and to the recognizer their walls are
+part-sized things on the table that no model explains, each costing a finer second look.
 
 The same test serves the look before a pick (the full Kinect frame) and the protective-stop
 monitor while the arm moves (a 160x120 depth render every 0.25 s; see :mod:`sim.cell`).
@@ -73,6 +75,8 @@ class Perception:
         model = world.model
         base = model.body(world.arm.base_body).id
         self._arm_bodies = np.array([b for b in range(model.nbody) if _descends(model, b, base)])
+        self._fixture_bodies = np.array([model.body(f"{name}_fixture").id for name in world.T_world_fixtures],
+                                        dtype=np.int64)
         heights = [world.catalog[p].bounds()[1, 2] for p in world.workpieces]
         self.ceiling = world.table_top + max(heights) + CEILING_MARGIN
         self._monitor_rays = MONITOR_CAMERA.pixel_rays().reshape(-1, 3)
@@ -88,8 +92,8 @@ class Perception:
         """Render the Kinect, count intruding points and (when nobody intrudes and recognising) run PSORR.
 
         PSORR gets the cloud cropped to the workspace: the table's footprint from just below its
-        top up to the ceiling, less the robot's own pixels. Cropped points become NaN, so the
-        cloud stays organised.
+        top up to the ceiling, less the robot's own pixels and the fixtures'. Cropped points become
+        NaN, so the cloud stays organised.
         """
         frame = self.camera.render(data, self.rng, KINECT_V1, rgb=self.rgb)
         pts = frame.cloud.points
@@ -102,7 +106,8 @@ class Perception:
         detections, estimates = (), {}
         if self._recognizer is not None and not occupied:
             with np.errstate(invalid="ignore"):
-                keep = valid & self._in_workspace(world_pts) & (world_pts[:, 2] <= self.ceiling)
+                keep = (valid & self._in_workspace(world_pts) & (world_pts[:, 2] <= self.ceiling)
+                        & ~np.isin(frame.segmentation.ravel(), self._fixture_bodies))
             cloud = _masked(frame.cloud, keep)
             detections = tuple(self._recognizer.recognize(cloud, self.rng).detections)
             for det in detections:
