@@ -95,6 +95,7 @@ class ArmCell:
         self._arm_geoms = [m.geom(g).id for g in cfg.collision_geoms]
         # Body ids are depth-first, so the arm's bodies in id order run from the base out to the hand.
         self._arm_chain = sorted({int(m.geom_bodyid[g]) for g in self._arm_geoms} | {m.body(cfg.base_body).id})
+        self._arm_geoms_in_chain = sorted(self._arm_geoms, key=lambda g: int(m.geom_bodyid[g]))
         self._human_geoms = [m.geom(g).id for g in world.occluder_geoms] if human is not None else []
         if human is not None:
             self._move_human()
@@ -111,13 +112,26 @@ class ArmCell:
             self.recorder.tick(self.world, self.data)
 
     def _move_human(self) -> None:
-        # The person sees the whole arm: its footprint runs from the base through every link to the tool.
-        tool = T_world_site(self.model, self.data, self.cfg.tool_site)[:2, 3]
-        footprint = np.vstack([self.data.xpos[self._arm_chain, :2], tool])
-        poses = self.human.update(self.data.time, footprint)
+        poses = self.human.update(self.data.time, self._footprint())
         if poses is not self._human_poses:
             self.world.apply_occluder(self.data, poses=poses)
             self._human_poses = poses
+
+    def _footprint(self) -> np.ndarray:
+        """(N, 2) the arm as the person sees it from above: a polyline from the base through every link's
+        collision geom (both ends of a capsule or cylinder, a box's centre) to the tool. The links' body
+        origins alone sit on the joint axes, and the UR5e's upper arm runs up to 0.2 m beside them: a
+        person keeping 0.25 m from those reached into the stopped upper arm (2 of 50 episodes)."""
+        m, d = self.model, self.data
+        points = [d.xpos[self._arm_chain[0], :2]]
+        for g in self._arm_geoms_in_chain:
+            if m.geom_type[g] in (mujoco.mjtGeom.mjGEOM_CAPSULE, mujoco.mjtGeom.mjGEOM_CYLINDER):
+                half = m.geom_size[g, 1] * d.geom_xmat[g].reshape(3, 3)[:, 2]
+                points += [(d.geom_xpos[g] - half)[:2], (d.geom_xpos[g] + half)[:2]]
+            else:
+                points.append(d.geom_xpos[g, :2])
+        points.append(T_world_site(m, d, self.cfg.tool_site)[:2, 3])
+        return np.array(points)
 
     def step(self, n: int, watch: bool = True) -> None:
         """Step the physics ``n`` times; while ``watch``ing, a protective stop inserts extra steps with
