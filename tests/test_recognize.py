@@ -38,14 +38,27 @@ def library(tmp_path_factory):
     return ModelLibrary.from_meshes(sorted(MESHES.glob("*.stl")))  # all 8 parts: 6+ models, as in the issue
 
 
+def _matches(det, instance, library, catalog) -> bool:
+    """Is ``det`` the scene's ``instance``: the same model, within a symmetric ADD of 0.1 x its diameter?"""
+    if det.model != instance.name:
+        return False
+    model = library.model(det.model)
+    return symmetric_add(model.points[::10], det.T_cloud_model, instance.T_camera_model,
+                         catalog[instance.name]) < 0.1 * model.diameter
+
+
+def _occluded_clutter(catalog, seed):
+    """The peers benchmark's cluttered scene of ``seed``: four parts the seed draws, and the occluder."""
+    names = list(np.random.default_rng(seed).choice(sorted(catalog), size=4, replace=False))
+    return workpiece_scene(np.random.default_rng(1000 + seed), {n: catalog[n].load_mesh() for n in names}, names,
+                           occluder=True)
+
+
 def _score(scene, detections, library, catalog):
     """(instances found, false positives)."""
     found, false = set(), 0
     for det in detections:
-        model = library.model(det.model)
-        hits = [k for k, inst in enumerate(scene.instances) if inst.name == det.model and
-                symmetric_add(model.points[::10], det.T_cloud_model, inst.T_camera_model, catalog[inst.name])
-                < 0.1 * model.diameter]
+        hits = [k for k, inst in enumerate(scene.instances) if _matches(det, inst, library, catalog)]
         if hits:
             found.add(hits[0])
         else:
@@ -92,17 +105,12 @@ def test_clutter_recall_and_false_positives(library, catalog):
 def test_a_second_pairing_round_finds_a_part_the_first_crowded_out(library, catalog):
     # Seed 1003 with the occluder (the peers benchmark's 4th cluttered scene): the bushing's few pair
     # votes lose to pairs across the other parts until those parts are explained and leave the pairing.
-    names = list(np.random.default_rng(3).choice(sorted(catalog), size=4, replace=False))
-    scene = workpiece_scene(np.random.default_rng(1003), {n: catalog[n].load_mesh() for n in names}, names,
-                            occluder=True)
+    scene = _occluded_clutter(catalog, 3)
     bushing = next(inst for inst in scene.instances if inst.name == "bushing")
-    model = library.model("bushing")
 
     def bushing_found(rounds):
         result = Recognizer(library, params=RecognizeParams(pair_rounds=rounds)).recognize(scene.cloud)
-        return result, any(d.model == "bushing" and symmetric_add(model.points[::10], d.T_cloud_model,
-                           bushing.T_camera_model, catalog["bushing"]) < 0.1 * model.diameter
-                           for d in result.detections)
+        return result, any(_matches(d, bushing, library, catalog) for d in result.detections)
 
     one, found_in_one = bushing_found(1)
     two, found_in_two = bushing_found(2)
@@ -115,17 +123,12 @@ def test_a_part_mostly_hidden_behind_others_is_judged_by_what_could_be_seen(libr
     # Seed 1006 with the occluder (the peers benchmark's 7th cluttered scene): the chassis shows less than
     # 0.35 of its sensor-facing surface, as the capsule and a part in front hide much of the rest. Of what
     # they leave in view, most is measured, and that is what accepts it.
-    names = list(np.random.default_rng(6).choice(sorted(catalog), size=4, replace=False))
-    scene = workpiece_scene(np.random.default_rng(1006), {n: catalog[n].load_mesh() for n in names}, names,
-                            occluder=True)
+    scene = _occluded_clutter(catalog, 6)
     chassis = next(inst for inst in scene.instances if inst.name == "chassis")
-    model = library.model("chassis")
 
     def chassis_found(params):
         return [d for d in Recognizer(library, params=params).recognize(scene.cloud).detections
-                if d.model == "chassis" and symmetric_add(model.points[::10], d.T_cloud_model,
-                                                          chassis.T_camera_model, catalog["chassis"])
-                < 0.1 * model.diameter]
+                if _matches(d, chassis, library, catalog)]
 
     assert not chassis_found(RecognizeParams(min_unblocked_fraction=1.0))
     found = chassis_found(RecognizeParams())
@@ -139,13 +142,10 @@ def test_what_stands_unexplained_gets_a_finer_second_look(library, catalog):
     names = sorted(catalog)
     scene = workpiece_scene(np.random.default_rng(2000 + 10 * names.index("bushing")),
                             {"bushing": catalog["bushing"].load_mesh()}, ["bushing"])
-    model = library.model("bushing")
 
     def found(params):
         result = Recognizer(library, params=params).recognize(scene.cloud)
-        return result, [d for d in result.detections if symmetric_add(
-            model.points[::10], d.T_cloud_model, scene.instances[0].T_camera_model, catalog["bushing"])
-            < 0.1 * model.diameter]
+        return result, [d for d in result.detections if _matches(d, scene.instances[0], library, catalog)]
 
     coarse_only, missed = found(RecognizeParams(fine_voxel=None))
     both, hit = found(RecognizeParams())
@@ -156,9 +156,7 @@ def test_what_stands_unexplained_gets_a_finer_second_look(library, catalog):
 def test_a_part_floating_on_the_arm_is_not_taken(library, catalog):
     # Seed 1004 with the occluder (the peers benchmark's 5th cluttered scene): an L bracket's plates fit
     # the arm-sized capsule within the depth tolerance, 13 cm above the table. Parts rest on the table.
-    names = list(np.random.default_rng(4).choice(sorted(catalog), size=4, replace=False))
-    scene = workpiece_scene(np.random.default_rng(1004), {n: catalog[n].load_mesh() for n in names}, names,
-                            occluder=True)
+    scene = _occluded_clutter(catalog, 4)
     plane = SceneView(scene.cloud).support_plane
 
     def lowest(d):
