@@ -36,7 +36,7 @@ from psorr.recognize_params import METHODS, Recognition, RecognitionStats, Recog
 from psorr.single_plane import SinglePlaneMatcher
 from psorr.support_crop import crop_to_parts
 from psorr.types import Detection, PointCloud, PrimitiveKind
-from psorr.unexplained import part_sized, standing_unexplained, without_explained
+from psorr.unexplained import on_detected_surface, part_sized, standing_unexplained, without_explained
 from psorr.verify import CheckParams, SceneView, check_pose, refine_icp
 
 
@@ -198,13 +198,8 @@ class Recognizer:
         (within half the ICP distance of its model's samples)? The whole surface, not the pixels it covers: a
         part's far side in a full view is explained too, and a part behind a detected one is not."""
         points = points[:: max(1, len(points) // 200)]
-        for d in detections:
-            T_model_cloud = np.linalg.inv(d.T_cloud_model)
-            local = points @ T_model_cloud[:3, :3].T + T_model_cloud[:3, 3]
-            gap, _ = self._model_trees[d.model].query(local, distance_upper_bound=self.params.icp_distance / 2)
-            if np.isfinite(gap).mean() >= share:
-                return True
-        return False
+        reach = self.params.icp_distance / 2
+        return any(on_detected_surface(points, d, self._model_trees, reach).mean() >= share for d in detections)
 
     def _pair_candidates(self, pts, nrm, scene_prims):
         """Pose hypotheses from pairs of the scene's oriented points (K, 3) and their primitives: matched

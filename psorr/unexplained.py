@@ -16,6 +16,15 @@ from psorr.support_crop import along_plane
 from psorr.types import PointCloud
 
 
+def on_detected_surface(points: np.ndarray, detection, model_trees: dict, reach: float) -> np.ndarray:
+    """(N,) bool: which of ``points`` (N, 3), cloud frame, lie within ``reach`` metres of the surface samples
+    of ``detection``'s model at its pose (``model_trees``: name -> cKDTree of the samples, model frame)."""
+    T_model_cloud = np.linalg.inv(detection.T_cloud_model)
+    local = points @ T_model_cloud[:3, :3].T + T_model_cloud[:3, 3]
+    gap, _ = model_trees[detection.model].query(local, distance_upper_bound=reach)
+    return np.isfinite(gap)
+
+
 def _standing(points: np.ndarray, plane: np.ndarray | None, off_plane: float) -> np.ndarray:
     """(N,) bool: finite, and more than ``off_plane`` metres above the plane (every finite point without one)."""
     finite = np.isfinite(points).all(axis=1)
@@ -37,10 +46,7 @@ def standing_unexplained(cloud: PointCloud, plane: np.ndarray | None, detections
         index = np.flatnonzero(mask)
         if len(index) == 0:
             break
-        T_model_cloud = np.linalg.inv(d.T_cloud_model)
-        local = pts[index] @ T_model_cloud[:3, :3].T + T_model_cloud[:3, 3]
-        gap, _ = model_trees[d.model].query(local, distance_upper_bound=reach)
-        mask[index[np.isfinite(gap)]] = False
+        mask[index[on_detected_surface(pts[index], d, model_trees, reach)]] = False
     return mask
 
 
