@@ -36,7 +36,7 @@ from psorr.recognize_params import METHODS, Recognition, RecognitionStats, Recog
 from psorr.single_plane import SinglePlaneMatcher
 from psorr.support_crop import crop_to_parts
 from psorr.types import Detection, PointCloud, PrimitiveKind
-from psorr.unexplained import on_detected_surface, part_sized, standing_unexplained, without_explained
+from psorr.unexplained import blanked, on_detected_surface, part_sized, standing_points, standing_unexplained
 from psorr.verify import CheckParams, SceneView, check_pose, refine_icp
 
 
@@ -139,14 +139,13 @@ class Recognizer:
         self._search(cloud, view, scene, tally)
         if p.fine_voxel is not None:
             # What stands on the table and no detection explains gets a second look, decomposed finer.
-            off = p.support_crop.off_plane
-            rest = standing_unexplained(cropped, view.support_plane, tally.detections, self._model_trees,
-                                        p.icp_distance / 2, off)
+            standing = standing_points(cropped, view.support_plane, p.support_crop.off_plane)
+            rest = standing_unexplained(cropped, standing, tally.detections, self._model_trees, p.icp_distance / 2)
             rest = part_sized(cropped, view.support_plane, rest, _TABLE_EXTENT * self.max_diameter)
             if rest.sum() >= p.min_unexplained:
                 t0 = time.perf_counter()
-                left = crop_to_parts(without_explained(cropped, view.support_plane, rest, off), view.support_plane,
-                                     margin, p.support_crop)
+                # The standing points that are explained go; the table stays, for the crop's band.
+                left = crop_to_parts(blanked(cropped, standing & ~rest), view.support_plane, margin, p.support_crop)
                 fine = decompose(left, replace(p.decompose, voxel_size=p.fine_voxel), rng)
                 tally.decomposition_ms += (time.perf_counter() - t0) * 1e3
                 self._search(cloud, view, fine, tally)

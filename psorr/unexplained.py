@@ -25,8 +25,10 @@ def on_detected_surface(points: np.ndarray, detection, model_trees: dict, reach:
     return np.isfinite(gap)
 
 
-def _standing(points: np.ndarray, plane: np.ndarray | None, off_plane: float) -> np.ndarray:
-    """(N,) bool: finite, and more than ``off_plane`` metres above the plane (every finite point without one)."""
+def standing_points(cloud: PointCloud, plane: np.ndarray | None, off_plane: float) -> np.ndarray:
+    """(N,) bool over ``cloud``'s points: finite, and more than ``off_plane`` metres above the supporting
+    ``plane`` (a, b, c, d; the sensor on its positive side); every finite point when there is no plane."""
+    points = cloud.points
     finite = np.isfinite(points).all(axis=1)
     standing = finite.copy()
     if plane is not None:
@@ -34,14 +36,13 @@ def _standing(points: np.ndarray, plane: np.ndarray | None, off_plane: float) ->
     return standing
 
 
-def standing_unexplained(cloud: PointCloud, plane: np.ndarray | None, detections, model_trees: dict,
-                         reach: float, off_plane: float) -> np.ndarray:
-    """(N,) bool over ``cloud``'s points: finite, more than ``off_plane`` metres above the supporting
-    ``plane`` (a, b, c, d; the sensor on its positive side), and farther than ``reach`` metres from
-    the surface samples of every detection's model (``model_trees``: name -> cKDTree of the samples,
-    model frame)."""
+def standing_unexplained(cloud: PointCloud, standing: np.ndarray, detections, model_trees: dict,
+                         reach: float) -> np.ndarray:
+    """(N,) bool: the ``standing`` points of ``cloud`` (see :func:`standing_points`) farther than ``reach``
+    metres from the surface samples of every detection's model (``model_trees``: name -> cKDTree of the
+    samples, model frame)."""
     pts = cloud.points
-    mask = _standing(pts, plane, off_plane)
+    mask = standing.copy()
     for d in detections:
         index = np.flatnonzero(mask)
         if len(index) == 0:
@@ -73,14 +74,11 @@ def part_sized(cloud: PointCloud, plane: np.ndarray | None, mask: np.ndarray, la
     return out
 
 
-def without_explained(cloud: PointCloud, plane: np.ndarray | None, unexplained: np.ndarray,
-                      off_plane: float) -> PointCloud:
-    """``cloud`` with its standing points that are not ``unexplained`` made NaN (point order kept, so
-    labels computed on the result index ``cloud``); the table's points stay."""
-    pts = cloud.points
-    blank = _standing(pts, plane, off_plane) & ~unexplained
-    if not blank.any():
+def blanked(cloud: PointCloud, mask: np.ndarray) -> PointCloud:
+    """``cloud`` with the points under ``mask`` (N,) made NaN (point order kept, so labels computed on
+    the result index ``cloud``)."""
+    if not mask.any():
         return cloud
-    out = pts.copy()
-    out[blank] = np.nan
+    out = cloud.points.copy()
+    out[mask] = np.nan
     return replace(cloud, points=out)

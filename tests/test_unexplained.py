@@ -7,7 +7,7 @@ from scipy.spatial import cKDTree
 from psorr.library import ModelLibrary
 from psorr.scenes import OCCLUDER_LABEL, workpiece_scene
 from psorr.types import Detection
-from psorr.unexplained import part_sized, standing_unexplained, without_explained
+from psorr.unexplained import blanked, part_sized, standing_points, standing_unexplained
 from psorr.verify import SceneView
 from psorr.workpieces import load_catalog
 
@@ -35,7 +35,8 @@ def test_a_detected_part_leaves_nothing_and_an_undetected_one_all_it_shows(parts
     plane = SceneView(scene.cloud).support_plane
     bushing, chassis = scene.instances
     found = [Detection("chassis", chassis.T_camera_model, 0.9)]
-    rest = standing_unexplained(scene.cloud, plane, found, _trees(library), REACH, OFF_PLANE)
+    standing = standing_points(scene.cloud, plane, OFF_PLANE)
+    rest = standing_unexplained(scene.cloud, standing, found, _trees(library), REACH)
     # The chassis' points are all explained; of the bushing's, all that stand clear of the table are not.
     height = scene.cloud.points @ plane[:3] + plane[3]
     on_bushing = scene.cloud.labels == 1
@@ -43,14 +44,14 @@ def test_a_detected_part_leaves_nothing_and_an_undetected_one_all_it_shows(parts
     assert rest[scene.cloud.labels == 2].mean() < 0.02
     assert not rest[height < OFF_PLANE].any()  # the table is never "unexplained"
     both = found + [Detection("bushing", bushing.T_camera_model, 0.9)]
-    assert standing_unexplained(scene.cloud, plane, both, _trees(library), REACH, OFF_PLANE).sum() < 60
+    assert standing_unexplained(scene.cloud, standing, both, _trees(library), REACH).sum() < 60
 
 
 def test_an_arm_across_the_table_is_not_part_sized_but_a_part_is(parts):
     _, meshes = parts
     scene = workpiece_scene(np.random.default_rng(1), {"bushing": meshes["bushing"]}, ["bushing"], occluder=True)
     plane = SceneView(scene.cloud).support_plane
-    standing = standing_unexplained(scene.cloud, plane, [], {}, REACH, OFF_PLANE)
+    standing = standing_unexplained(scene.cloud, standing_points(scene.cloud, plane, OFF_PLANE), [], {}, REACH)
     kept = part_sized(scene.cloud, plane, standing, largest=0.19)
     assert kept[standing & (scene.cloud.labels == 1)].mean() > 0.95  # the bushing stays
     arm = standing & (scene.cloud.labels == OCCLUDER_LABEL)  # the capsule reaching across
@@ -63,8 +64,9 @@ def test_explained_standing_points_are_blanked_and_the_table_kept(parts):
     scene = workpiece_scene(np.random.default_rng(3), meshes, ["bushing", "chassis"])
     plane = SceneView(scene.cloud).support_plane
     found = [Detection("chassis", scene.instances[1].T_camera_model, 0.9)]
-    rest = standing_unexplained(scene.cloud, plane, found, _trees(library), REACH, OFF_PLANE)
-    left = without_explained(scene.cloud, plane, rest, OFF_PLANE)
+    standing = standing_points(scene.cloud, plane, OFF_PLANE)
+    rest = standing_unexplained(scene.cloud, standing, found, _trees(library), REACH)
+    left = blanked(scene.cloud, standing & ~rest)
     kept = np.isfinite(left.points).all(axis=1)
     before = np.isfinite(scene.cloud.points).all(axis=1)
     height = scene.cloud.points @ plane[:3] + plane[3]
