@@ -71,19 +71,25 @@ def depth_tolerance(z: np.ndarray, params: CheckParams) -> np.ndarray:
 
 def buffer_focal(cloud: PointCloud, ux: np.ndarray, uy: np.ndarray) -> float:
     """Focal length (pixels) at which the cloud fills its depth buffer: an
-    organised cloud's own (a Kinect scaled to its width), else one pixel per
-    two median angular gaps between neighbouring points. A fixed 640-wide focal
-    would leave a 320x240 cloud's buffer three-quarters empty. Two gaps, because
-    an unorganised cloud's points do not fall one per pixel: with one gap, about
-    a third of a surface's pixels would hold no point of it, and show the surface
-    behind, so a correct pose would look seen through."""
+    organised cloud's own (a Kinect scaled to its width), else a pixel two
+    point spacings wide, the spacing measured by density (the median disc
+    around a ray that holds its six nearest rays, over six). A fixed 640-wide
+    focal would leave a 320x240 cloud's buffer three-quarters empty. Two
+    spacings, because an unorganised cloud's points do not fall one per pixel:
+    at one, about a third of a surface's pixels would hold no point of it, and
+    show the surface behind, so a correct pose would look seen through. The
+    nearest-neighbour gap is no measure of spacing: thinning a cloud to one
+    point per voxel leaves pairs across voxel borders, and its median gap half
+    the voxel."""
     if cloud.is_organised:
         return KINECT_FOCAL * cloud.width / 640.0
     from scipy.spatial import cKDTree
 
-    rays = np.column_stack([ux, uy])[:: max(1, len(ux) // 20000)]
-    gap, _ = cKDTree(rays).query(rays, k=2)
-    spacing = float(np.median(gap[:, 1]))
+    rays = np.column_stack([ux, uy])
+    if len(rays) < 7:
+        return KINECT_FOCAL
+    disc, _ = cKDTree(rays).query(rays[:: max(1, len(rays) // 20000)], k=7)
+    spacing = float(np.sqrt(np.pi * np.median(disc[:, 6]) ** 2 / 6))
     return 0.5 / spacing if spacing > 0 else KINECT_FOCAL
 
 
