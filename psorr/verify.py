@@ -16,6 +16,7 @@ from functools import cached_property
 import numpy as np
 import open3d as o3d
 
+from psorr.icp import register
 from psorr.kinect_noise import KINECT_V1
 from psorr.types import PointCloud
 
@@ -247,6 +248,12 @@ def refine_icp(view: SceneView, model_points, model_normals, T_cloud_model, max_
     stride = max(1, len(model_points) // max_points)
     pts, nrm = model_points[::stride] @ R.T + t, model_normals[::stride] @ R.T
     visible = visible_model_points(view, pts, nrm)
+    if len(visible):
+        # Points a nearer surface hides would pair with that surface and drag the part onto it (a U-channel
+        # under two others went from its true pose to 0.47 diameters off).
+        u, v, _ = view.project(pts[visible])
+        z = pts[visible, 2]
+        visible = visible[~(z > view.depth[v * view.width + u] + depth_tolerance(z, CheckParams()))]
     if len(visible) < 10:
         return T_cloud_model
     # A target cropped to the hypothesis keeps Open3D's per-call k-d tree small.
@@ -255,16 +262,4 @@ def refine_icp(view: SceneView, model_points, model_normals, T_cloud_model, max_
     target = view.icp_target(centre, radius)
     if len(target.points) < 10:
         return T_cloud_model
-    source = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(pts[visible]))
-    # Open3D sums ICP's normal equations across threads in whatever order they finish, so the last
-    # bits of the pose, and everything a seeded episode does after it, would change from run to run.
-    threads = o3d.utility.get_max_threads()
-    o3d.utility.set_max_threads(1)
-    try:
-        result = o3d.pipelines.registration.registration_icp(
-            source, target, max_distance, np.eye(4),
-            o3d.pipelines.registration.TransformationEstimationPointToPlane(),
-            o3d.pipelines.registration.ICPConvergenceCriteria(max_iteration=iterations))
-    finally:
-        o3d.utility.set_max_threads(threads)
-    return np.asarray(result.transformation) @ T_cloud_model
+    return register(pts[visible], target, max_distance, iterations) @ T_cloud_model

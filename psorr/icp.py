@@ -1,0 +1,95 @@
+"""Point-to-plane ICP: Open3D's, and a damped one for when Open3D's runs away.
+
+Point-to-plane ICP solves, each iteration, for the small motion that best moves the source
+points onto the target's tangent planes. A part that shows only a cylinder, or a long channel,
+leaves some motions unconstrained (sliding along the axis, rolling about it), and the 6x6 normal
+equations are then nearly singular: an undamped solve turns noise into steps of centimetres along
+them. Open3D's carried a pipe tee, whose branch was hidden, from its true pose to 0.9 diameters
+off. :func:`point_to_plane` damps the equations towards the start pose (Levenberg-Marquardt with
+the start as prior): a motion the planes do not constrain is not taken, and one they do is barely
+slowed. It costs four times Open3D's, so :func:`register` runs it only when Open3D's moved the
+points further than a well-posed fit can (RUNAWAY x the pairing distance, on average).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import open3d as o3d
+from scipy.spatial import cKDTree
+
+DAMPING = 1e-2  # x the largest eigenvalue of the (scaled) normal equations, towards the start pose
+STOP_STEP = 1e-6  # m, and radians x the source's radius: a step smaller than this has converged
+RUNAWAY = 2.0  # x max_distance: an Open3D fit that moves the points further than this on average is redone
+
+
+def register(source: np.ndarray, target: o3d.geometry.PointCloud, max_distance: float, iterations: int) -> np.ndarray:
+    """The motion T (4, 4) that moves ``source`` (N, 3) onto ``target`` (points with normals): Open3D's
+    point-to-plane ICP, or :func:`point_to_plane` where that one ran away."""
+    cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(source))
+    # Open3D sums ICP's normal equations across threads in whatever order they finish, so the last
+    # bits of the pose, and everything a seeded episode does after it, would change from run to run.
+    threads = o3d.utility.get_max_threads()
+    o3d.utility.set_max_threads(1)
+    try:
+        result = o3d.pipelines.registration.registration_icp(
+            cloud, target, max_distance, np.eye(4),
+            o3d.pipelines.registration.TransformationEstimationPointToPlane(),
+            o3d.pipelines.registration.ICPConvergenceCriteria(max_iteration=iterations))
+    finally:
+        o3d.utility.set_max_threads(threads)
+    T = np.asarray(result.transformation)
+    moved = np.linalg.norm(source @ T[:3, :3].T + T[:3, 3] - source, axis=1).mean()
+    if moved <= RUNAWAY * max_distance:
+        return T
+    return point_to_plane(source, np.asarray(target.points), np.asarray(target.normals), max_distance, iterations)
+
+
+def point_to_plane(source: np.ndarray, target: np.ndarray, target_normals: np.ndarray, max_distance: float,
+                   iterations: int = 30) -> np.ndarray:
+    """The rigid motion T (4, 4) that moves ``source`` (N, 3) onto the planes of ``target`` (M, 3) with unit
+    ``target_normals`` (M, 3), pairing each source point with its nearest target point within
+    ``max_distance`` metres, damped towards no motion. Returns the identity when fewer than 6 points pair."""
+    tree = cKDTree(target)
+    centre = source.mean(axis=0)
+    # Turns are solved for in units of the source's radius, so that one damping suits turns and slides.
+    scale = max(float(np.sqrt(((source - centre) ** 2).sum(axis=1).mean())), 1e-6)
+    R, t = np.eye(3), np.zeros(3)
+    for _ in range(iterations):
+        moved = source @ R.T + t
+        distance, nearest = tree.query(moved, distance_upper_bound=max_distance)
+        paired = np.isfinite(distance)
+        if paired.sum() < 6:
+            break
+        p, q, n = moved[paired] - centre, target[nearest[paired]] - centre, target_normals[nearest[paired]]
+        J = np.column_stack([np.cross(p, n) / scale, n])  # d(residual) / d(turn x scale, slide)
+        r = np.einsum("ij,ij->i", p - q, n)
+        H = J.T @ J
+        # The prior holds the start: what the planes do not constrain stays where the start put it.
+        so_far = np.concatenate([_rotation_vector(R) * scale, R @ centre + t - centre])
+        damping = DAMPING * np.linalg.eigvalsh(H)[-1]
+        step = np.linalg.solve(H + damping * np.eye(6), -J.T @ r - damping * so_far)
+        turn, slide = step[:3] / scale, step[3:]
+        angle = float(np.linalg.norm(turn))
+        dR = _rotation(turn / angle, angle) if angle > 0 else np.eye(3)
+        # The step turns about the centre: p' = dR p + slide, in coordinates about it.
+        R, t = dR @ R, dR @ (t - centre) + centre + slide
+        if np.linalg.norm(slide) < STOP_STEP and angle * scale < STOP_STEP:
+            break
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = R, t
+    return T
+
+
+def _rotation_vector(R: np.ndarray) -> np.ndarray:
+    """The axis times the angle (radians) of the rotation R (3, 3), for angles below 180 degrees."""
+    angle = float(np.arccos(np.clip((np.trace(R) - 1) / 2, -1.0, 1.0)))
+    if angle < 1e-12:
+        return np.zeros(3)
+    w = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
+    return w * angle / (2 * np.sin(angle))
+
+
+def _rotation(axis: np.ndarray, angle: float) -> np.ndarray:
+    """(3, 3) rotation by ``angle`` radians about the unit ``axis``."""
+    K = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    return np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K
