@@ -257,10 +257,13 @@ class Recognizer:
             model = self.library.models[model_index]
             # Coarse: 1000 model points and 15 iterations, enough to tell the hopeless candidates (below).
             T = refine_icp(view, model.points, model.normals, T, p.icp_distance, iterations=15, max_points=1000)
-            # Most candidates are wrong, and one coarse ICP shows it: too little of the model is measured,
-            # or the sensor sees through too much of it. The fine pass is kept for the rest.
+            # Most candidates are wrong, and one coarse ICP shows it: too little of the model is measured
+            # (of its surface, and of what nearer ones leave in view), or the sensor sees through too much
+            # of it. The fine pass is kept for the rest.
             coarse = check_pose(view, model.points, model.normals, T, _COARSE)
-            if coarse.visible_fraction < p.min_visible_fraction / 2 or coarse.violation_ratio > max_violation:
+            hopeless = (coarse.visible_fraction < p.min_visible_fraction / 2
+                        and coarse.unblocked_fraction < p.min_unblocked_fraction / 2)
+            if hopeless or coarse.violation_ratio > max_violation:
                 continue
             T = refine_icp(view, model.points, model.normals, T, p.icp_distance / 3)
             check = check_pose(view, model.points, model.normals, T, p.check)

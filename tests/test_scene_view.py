@@ -82,3 +82,27 @@ def test_the_unblocked_fraction_leaves_out_what_nearer_surfaces_hide():
     hidden = PoseCheck(n_visible=50, n_support=0, n_violation=0, n_occluded=50,
                        supported_blocks=np.empty(0, dtype=np.int64))
     assert hidden.unblocked_fraction == 0.0
+
+
+def test_unmeasured_pixels_beside_a_nearer_surface_count_as_hidden():
+    # The peers benchmark's occluded scene of seed 2: the capsule across the view casts a projector shadow
+    # over the bushing, so half its sensor-facing points have no measurement. They are hidden, as if the
+    # capsule covered them, and what is left in view is almost all measured.
+    from psorr.library import ModelLibrary
+    from psorr.verify import check_pose, visible_model_points
+
+    catalog = load_catalog()
+    names = list(np.random.default_rng(2).choice(sorted(catalog), size=4, replace=False))
+    scene = workpiece_scene(np.random.default_rng(1002), {n: catalog[n].load_mesh() for n in names}, names,
+                            occluder=True)
+    bushing = next(inst for inst in scene.instances if inst.name == "bushing")
+    model = ModelLibrary.from_meshes([catalog["bushing"].mesh_path]).model("bushing")
+    view = SceneView(scene.cloud)
+    check = check_pose(view, model.points, model.normals, bushing.T_camera_model)
+    T = bushing.T_camera_model
+    points, normals = model.points @ T[:3, :3].T + T[:3, 3], model.normals @ T[:3, :3].T
+    u, v, _ = view.project(points[visible_model_points(view, points, normals)])
+    assert np.isinf(view.depth[v * view.width + u]).mean() > 0.4  # no measurement: the shadow
+    unknown = check.n_visible - check.n_support - check.n_violation - check.n_occluded
+    assert unknown < 0.05 * check.n_visible
+    assert check.unblocked_fraction > 0.9 and check.visible_fraction < 0.35
