@@ -8,14 +8,16 @@ small features (a window, a gland hole, a row of holes) that only a dense point 
 :func:`near_symmetries` finds, per model, the half turns about its principal axes (through
 the centroid of its samples), each settled onto the model by ICP, that move its surface by little
 on average (an L bracket's legs swap about their bisector, a few degrees off its principal axes);
-exact symmetries qualify too, which is harmless. :func:`near_continuous_axis` finds an axis about which any turn
-is a near-symmetry (a flanged hub, whose yaw only its bolt holes fix). :func:`near_uniform_direction`
-finds a direction along which the part slides almost onto itself (a U-channel along its length, which
-only its two end faces fix): ICP cannot place such a part along it, and a pose from primitive pairs
-can start a centimetre or two off there. :class:`NearSymmetryResolver` re-fits each turned pose with
-ICP, searches the turn about the axis or the slide along the direction, and keeps the pose whose
-rendered depth (:mod:`psorr.depth_compare`) agrees best with the measurement where the candidates
-differ. When the features are hidden the poses cannot be told apart, and the original is kept.
+exact symmetries qualify too, which is harmless. :func:`near_continuous_axis` finds an axis about
+which any turn is a near-symmetry (a flanged hub, whose yaw only its bolt holes fix).
+:func:`near_uniform_direction` finds a direction along which the part slides almost onto itself (a
+U-channel along its length, which only its two end faces fix): ICP cannot place such a part along
+it, and a pose from primitive pairs can start a centimetre or two off there, or several when others
+hide part of its faces (:meth:`NearSymmetryResolver.slide_onto_surface` then finds it along the data
+before ICP). :class:`NearSymmetryResolver` re-fits each turned pose with ICP, searches the turn about
+the axis or the slide along the direction, and keeps the pose whose rendered depth
+(:mod:`psorr.depth_compare`) agrees best with the measurement where the candidates differ. When the
+features are hidden the poses cannot be told apart, and the original is kept.
 """
 
 from __future__ import annotations
@@ -38,6 +40,7 @@ AXIS_COARSE_DEG, AXIS_FINE_DEG = 4.0, 0.5
 # SLIDE_REACH x diameter, in SLIDE_COARSE steps, then SLIDE_FINE steps around the best.
 TEST_SHIFT, UNIFORM_LIMIT = 0.05, 0.1
 SLIDE_REACH, SLIDE_COARSE, SLIDE_FINE = 0.16, 0.02, 0.005
+SLIDE_SEARCH = 0.4  # x diameter: how far a candidate is slid to find the measured surface (slide_onto_surface)
 DENSE_CHECK = CheckParams(max_points=6000)
 # A turned pose replaces the original only when its residual is clearly lower; when the features
 # that tell them apart are hidden the residuals tie, and recognition's own choice stands.
@@ -217,6 +220,18 @@ class NearSymmetryResolver:
         k = int(np.argmin(costs))
         # As with the turns: a slide must clearly lower the residual, or the end faces are hidden.
         return poses[k] if costs[k] < SWITCH_RATIO * costs[0] else T
+
+    def slide_onto_surface(self, view: SceneView, T: np.ndarray, params: CheckParams) -> np.ndarray:
+        """For a part that slides almost onto itself (:func:`near_uniform_direction`): the pose along that
+        direction, within SLIDE_SEARCH x diameter of ``T``, whose point check scores best. A pose from plane
+        centroids is off along a channel by as much as a third of its length when others hide part of
+        its faces, beyond both ICP's reach and the render-and-compare slide's."""
+        if self.slide is None:
+            return T
+        poses = self._slid(T, np.arange(-SLIDE_SEARCH, SLIDE_SEARCH + 1e-9, SLIDE_COARSE))
+        m = self.model
+        scores = [check_pose(view, m.points, m.normals, P, params).score for P in poses]
+        return poses[int(np.argmax(scores))]
 
     def _best_half_turn(self, view: SceneView, T: np.ndarray, icp_distance: float) -> np.ndarray:
         m = self.model

@@ -255,6 +255,8 @@ class Recognizer:
         scored = []
         for model_index, T in candidates:
             model = self.library.models[model_index]
+            # A part that slides almost onto itself (a channel) is placed along its length by the data first.
+            T = self._resolvers[model.name].slide_onto_surface(view, T, _COARSE)
             # Coarse: 1000 model points and 15 iterations, enough to tell the hopeless candidates (below).
             T = refine_icp(view, model.points, model.normals, T, p.icp_distance, iterations=15, max_points=1000)
             # Most candidates are wrong, and one coarse ICP shows it: too little of the model is measured

@@ -135,6 +135,21 @@ def test_a_part_mostly_hidden_behind_others_is_judged_by_what_could_be_seen(libr
     assert len(found) == 1 and found[0].visible_fraction < RecognizeParams().min_visible_fraction
 
 
+def test_partly_hidden_parts_of_the_occluded_benchmark_scenes_are_found(library, catalog):
+    # Three of the peers benchmark's misses, each for its own reason:
+    # - the chassis of seed 2 shows 0.18 of its sensor-facing surface, and most of the rest lies in the arm's
+    #   projector shadow: unmeasured, it counted against the part until shadows counted as hidden;
+    # - the U-channel of seed 3, two thirds hidden, got pair poses 4 cm off along its length, where neither
+    #   ICP nor the resolver's slide reaches: candidates of a sliding part are now slid onto the data first;
+    # - the pipe tee of seed 4 shows its run but not its branch, and Open3D's ICP rolled it away.
+    for seed, name in ((2, "chassis"), (3, "u_channel"), (4, "pipe_tee")):
+        scene = _occluded_clutter(catalog, seed)
+        part = next(inst for inst in scene.instances if inst.name == name)
+        detections = Recognizer(library).recognize(scene.cloud).detections
+        assert any(_matches(d, part, library, catalog) for d in detections), (seed, name)
+        assert _score(scene, detections, library, catalog)[1] == 0, (seed, "false positive")
+
+
 def test_what_stands_unexplained_gets_a_finer_second_look(library, catalog):
     # The peers benchmark's bushing scene of seed 0: at 8 mm voxels the 54 mm bushing's faces come out
     # as a cylinder of the wrong radius and planes merged with the table, and no pair of them matches.
