@@ -42,6 +42,9 @@ TEST_SHIFT, UNIFORM_LIMIT = 0.05, 0.1
 SLIDE_REACH, SLIDE_COARSE, SLIDE_FINE = 0.16, 0.02, 0.005
 SLIDE_SEARCH = 0.4  # x diameter: how far a candidate is slid to find the measured surface (slide_onto_surface)
 DENSE_CHECK = CheckParams(max_points=6000)
+# A half turn that moves fewer than FEATURE_SHARE of the samples further than FEATURE_MOVE from the surface
+# is exact but for small features (the chassis' window and gland hole).
+FEATURE_MOVE, FEATURE_SHARE = 0.002, 0.1
 # A turned pose replaces the original only when its residual is clearly lower; when the features
 # that tell them apart are hidden the residuals tie, and recognition's own choice stands.
 SWITCH_RATIO = 0.9
@@ -169,6 +172,10 @@ class NearSymmetryResolver:
                                      near_uniform_direction(model, self.renderer))
         self.turns, self.axis, self.slide = found
         self._centre = model.points.mean(axis=0)
+        tree = cKDTree(model.points)
+        self._exact_but_features = np.array([
+            (tree.query(model.points @ S[:3, :3].T + S[:3, 3])[0] > FEATURE_MOVE).mean() < FEATURE_SHARE
+            for S in self.turns], dtype=bool)
 
     def resolve(self, view: SceneView, T_cloud_model: np.ndarray, icp_distance: float) -> tuple[np.ndarray, PoseCheck]:
         """The best pose (4, 4) and its dense :class:`PoseCheck`."""
@@ -182,9 +189,9 @@ class NearSymmetryResolver:
         m = self.model
         return T, check_pose(view, m.points, m.normals, T, DENSE_CHECK)
 
-    def _costs(self, view: SceneView, poses: np.ndarray) -> np.ndarray:
+    def _costs(self, view: SceneView, poses: np.ndarray, twins=None) -> np.ndarray:
         centre = poses[0, :3, :3] @ self._centre + poses[0, :3, 3]
-        return residual_costs(view, self.renderer, poses, centre, 0.5 * self.model.diameter)
+        return residual_costs(view, self.renderer, poses, centre, 0.5 * self.model.diameter, twins=twins)
 
     def _about_axis(self, T: np.ndarray, degrees: np.ndarray) -> np.ndarray:
         point, axis = self.axis
@@ -235,12 +242,24 @@ class NearSymmetryResolver:
 
     def _best_half_turn(self, view: SceneView, T: np.ndarray, icp_distance: float) -> np.ndarray:
         m = self.model
-        poses = [T]
+        turned = []
         for S in self.turns:
-            turned = refine_icp(view, m.points, m.normals, T @ S, icp_distance)
-            poses.append(refine_icp(view, m.points, m.normals, turned, icp_distance / 3))
-        poses = np.array(poses)
-        costs = self._costs(view, poses)
-        k = int(np.argmin(costs))
+            pose = refine_icp(view, m.points, m.normals, T @ S, icp_distance)
+            turned.append(refine_icp(view, m.points, m.normals, pose, icp_distance / 3))
+        turned = np.array(turned)
+        ratios = np.full(len(turned), np.inf)  # each turned pose's cost over the original's
+        exact = self._exact_but_features
+        for k in np.flatnonzero(exact):
+            # ICP fits the turned pose a millimetre or two from the original, and along a part's outline
+            # that misalignment costs more than small features where they cover a few dozen pixels (Table
+            # 1's full views). So only the features' pixels count: where each pose, turned in place, renders
+            # differently from itself. Outside them the two are the same part in nearly the same place.
+            S = self.turns[k]
+            costs = self._costs(view, np.array([T, turned[k], T @ S, turned[k] @ S]), twins=[(0, 2), (1, 3)])
+            ratios[k] = costs[1] / costs[0] if costs[0] > 0 else np.inf
+        if (~exact).any():
+            costs = self._costs(view, np.concatenate([T[None], turned[~exact]]))
+            ratios[~exact] = costs[1:] / costs[0] if costs[0] > 0 else np.inf
+        k = int(np.argmin(ratios))
         # Ties (the features that tell the poses apart are hidden) keep the pose recognition found.
-        return poses[k] if costs[k] < SWITCH_RATIO * costs[0] else T
+        return turned[k] if ratios[k] < SWITCH_RATIO else T

@@ -69,13 +69,16 @@ def pixel_window(view: SceneView, centre: np.ndarray, radius: float) -> tuple[np
 
 
 def residual_costs(view: SceneView, renderer: DepthRenderer, poses: np.ndarray, centre: np.ndarray,
-                   radius: float, discriminative: bool = True) -> np.ndarray:
+                   radius: float, discriminative: bool = True,
+                   twins: list[tuple[int, int]] | None = None) -> np.ndarray:
     """(K,) cost of each pose (K, 4, 4): the summed squared depth residual, in Kinect sigmas and
     capped at ``RESIDUAL_CAP``, of the rendered model (with the supporting plane behind it) against
     the measured depth, over the pixels around the sphere (``centre``, ``radius``).
 
     With ``discriminative``, only pixels where some pose renders differently from the first count:
-    the rest add the same amount to every pose, and their noise would drown a small feature.
+    the rest add the same amount to every pose, and their noise would drown a small feature. With
+    ``twins``, pairs (a, b) of indices into ``poses``, only pixels where some pose a renders differently
+    from its twin b count instead.
     """
     pixels, rays = pixel_window(view, centre, radius)
     if len(pixels) == 0:
@@ -91,9 +94,17 @@ def residual_costs(view: SceneView, renderer: DepthRenderer, poses: np.ndarray, 
     sigma = KINECT_V1.depth_sigma(observed)
     residual = (rendered - observed[None]) / sigma[None]
     cost = np.minimum(np.where(np.isfinite(residual), residual**2, RESIDUAL_CAP), RESIDUAL_CAP)
-    if discriminative:
-        with np.errstate(invalid="ignore"):
-            differs = np.abs(rendered - rendered[:1]) > DISCRIMINATIVE_SIGMAS * sigma[None]
-        differs |= np.isfinite(rendered) != np.isfinite(rendered[:1])
-        cost = cost[:, differs.any(axis=0)]
+    if twins is not None:
+        a, b = np.array(twins).T
+        cost = cost[:, _differs(rendered[a], rendered[b], sigma).any(axis=0)]
+    elif discriminative:
+        cost = cost[:, _differs(rendered, rendered[:1], sigma).any(axis=0)]
     return cost.sum(axis=1)
+
+
+def _differs(rendered: np.ndarray, other: np.ndarray, sigma: np.ndarray) -> np.ndarray:
+    """(K, P) where depths ``rendered`` (K, P) and ``other`` (K or 1, P) differ: by more than
+    DISCRIMINATIVE_SIGMAS x ``sigma`` (P,), or one hits the model and the other does not."""
+    with np.errstate(invalid="ignore"):
+        differs = np.abs(rendered - other) > DISCRIMINATIVE_SIGMAS * sigma[None]
+    return differs | (np.isfinite(rendered) != np.isfinite(other))
