@@ -40,7 +40,9 @@ AXIS_COARSE_DEG, AXIS_FINE_DEG = 4.0, 0.5
 # SLIDE_REACH x diameter, in SLIDE_COARSE steps, then SLIDE_FINE steps around the best.
 TEST_SHIFT, UNIFORM_LIMIT = 0.05, 0.1
 SLIDE_REACH, SLIDE_COARSE, SLIDE_FINE = 0.16, 0.02, 0.005
-SLIDE_SEARCH = 0.4  # x diameter: how far a candidate is slid to find the measured surface (slide_onto_surface)
+# x diameter: how far a candidate is slid to find the measured surface (slide_onto_surface), and in what
+# steps (ICP, after it, pairs points up to 12 mm apart: 0.09 of the U-channel's diameter)
+SLIDE_SEARCH, SLIDE_SEARCH_STEP = 0.4, 0.05
 DENSE_CHECK = CheckParams(max_points=6000)
 # A half turn that moves fewer than FEATURE_SHARE of the samples further than FEATURE_MOVE from the surface
 # is exact but for small features (the chassis' window and gland hole).
@@ -235,7 +237,7 @@ class NearSymmetryResolver:
         its faces, beyond both ICP's reach and the render-and-compare slide's."""
         if self.slide is None:
             return T
-        poses = self._slid(T, np.arange(-SLIDE_SEARCH, SLIDE_SEARCH + 1e-9, SLIDE_COARSE))
+        poses = self._slid(T, np.arange(-SLIDE_SEARCH, SLIDE_SEARCH + 1e-9, SLIDE_SEARCH_STEP))
         m = self.model
         scores = [check_pose(view, m.points, m.normals, P, params).score for P in poses]
         return poses[int(np.argmax(scores))]

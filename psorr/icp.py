@@ -18,8 +18,9 @@ import open3d as o3d
 from scipy.spatial import cKDTree
 
 DAMPING = 1e-2  # x the largest eigenvalue of the (scaled) normal equations, towards the start pose
-STOP_STEP = 1e-6  # m, and radians x the source's radius: a step smaller than this has converged
+STOP_STEP = 1e-5  # m, and radians x the source's radius: a step smaller than this has converged
 RUNAWAY = 2.0  # x max_distance: an Open3D fit that moves the points further than this on average is redone
+DAMPED_POINTS = 1000  # ... with about this many of its source points: six unknowns need no more
 
 
 def register(source: np.ndarray, target: o3d.geometry.PointCloud, max_distance: float, iterations: int) -> np.ndarray:
@@ -41,7 +42,8 @@ def register(source: np.ndarray, target: o3d.geometry.PointCloud, max_distance: 
     moved = np.linalg.norm(source @ T[:3, :3].T + T[:3, 3] - source, axis=1).mean()
     if moved <= RUNAWAY * max_distance:
         return T
-    return point_to_plane(source, np.asarray(target.points), np.asarray(target.normals), max_distance, iterations)
+    sparse = source[:: max(1, len(source) // DAMPED_POINTS)]
+    return point_to_plane(sparse, np.asarray(target.points), np.asarray(target.normals), max_distance, iterations)
 
 
 def point_to_plane(source: np.ndarray, target: np.ndarray, target_normals: np.ndarray, max_distance: float,
