@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 import open3d as o3d
 from scipy.spatial import cKDTree
+from scipy.spatial.transform import Rotation
 
 DAMPING = 1e-2  # x the largest eigenvalue of the (scaled) normal equations, towards the start pose
 STOP_STEP = 1e-5  # m, and radians x the source's radius: a step smaller than this has converged
@@ -67,31 +68,15 @@ def point_to_plane(source: np.ndarray, target: np.ndarray, target_normals: np.nd
         r = np.einsum("ij,ij->i", p - q, n)
         H = J.T @ J
         # The prior holds the start: what the planes do not constrain stays where the start put it.
-        so_far = np.concatenate([_rotation_vector(R) * scale, R @ centre + t - centre])
+        so_far = np.concatenate([Rotation.from_matrix(R).as_rotvec() * scale, R @ centre + t - centre])
         damping = DAMPING * np.linalg.eigvalsh(H)[-1]
         step = np.linalg.solve(H + damping * np.eye(6), -J.T @ r - damping * so_far)
         turn, slide = step[:3] / scale, step[3:]
-        angle = float(np.linalg.norm(turn))
-        dR = _rotation(turn / angle, angle) if angle > 0 else np.eye(3)
+        dR = Rotation.from_rotvec(turn).as_matrix()
         # The step turns about the centre: p' = dR p + slide, in coordinates about it.
         R, t = dR @ R, dR @ (t - centre) + centre + slide
-        if np.linalg.norm(slide) < STOP_STEP and angle * scale < STOP_STEP:
+        if np.linalg.norm(slide) < STOP_STEP and np.linalg.norm(turn) * scale < STOP_STEP:
             break
     T = np.eye(4)
     T[:3, :3], T[:3, 3] = R, t
     return T
-
-
-def _rotation_vector(R: np.ndarray) -> np.ndarray:
-    """The axis times the angle (radians) of the rotation R (3, 3), for angles below 180 degrees."""
-    angle = float(np.arccos(np.clip((np.trace(R) - 1) / 2, -1.0, 1.0)))
-    if angle < 1e-12:
-        return np.zeros(3)
-    w = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
-    return w * angle / (2 * np.sin(angle))
-
-
-def _rotation(axis: np.ndarray, angle: float) -> np.ndarray:
-    """(3, 3) rotation by ``angle`` radians about the unit ``axis``."""
-    K = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
-    return np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K

@@ -2,8 +2,9 @@
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
-from psorr.icp import _rotation, point_to_plane
+from psorr.icp import point_to_plane
 from psorr.library import ModelLibrary
 from psorr.scenes import workpiece_scene
 from psorr.verify import SceneView, refine_icp
@@ -26,7 +27,7 @@ def _corner(rng, n=3000):
 def test_a_well_posed_fit_converges_to_the_true_motion():
     rng = np.random.default_rng(0)
     target, normals = _corner(rng)
-    R = _rotation(np.array([1.0, 2.0, 3.0]) / np.sqrt(14), np.radians(3.0))
+    R = Rotation.from_rotvec(np.radians(3.0) * np.array([1.0, 2.0, 3.0]) / np.sqrt(14)).as_matrix()
     source = target[::3] @ R.T + [0.004, -0.003, 0.002]
     T = point_to_plane(source, target, normals, max_distance=0.012)
     moved = source @ T[:3, :3].T + T[:3, 3]
