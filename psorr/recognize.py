@@ -267,7 +267,7 @@ class Recognizer:
                         and coarse.unblocked_fraction < p.min_unblocked_fraction / 2)
             if hopeless or coarse.violation_ratio > max_violation:
                 continue
-            T = refine_icp(view, model.points, model.normals, T, p.icp_distance / 3)
+            T = refine_icp(view, model.points, model.normals, T, p.icp_distance / 3, max_points=p.icp_points)
             check = check_pose(view, model.points, model.normals, T, p.check)
             seen_enough = (check.visible_fraction >= p.min_visible_fraction
                            or check.unblocked_fraction >= p.min_unblocked_fraction)
