@@ -145,7 +145,16 @@ def near_uniform_direction(model, renderer: DepthRenderer) -> np.ndarray | None:
     return axes[:, k] if moved[k] < UNIFORM_LIMIT else None
 
 
-# A model's near-symmetries (turns, axis, slide direction), by model object: Models are immutable.
+def _exact_but_features(points: np.ndarray, turns: np.ndarray) -> np.ndarray:
+    """(K,) bool: does each turn (K, 4, 4) move fewer than FEATURE_SHARE of the model's ``points`` (N, 3)
+    further than FEATURE_MOVE from the samples?"""
+    tree = cKDTree(points)
+    return np.array([(tree.query(points @ S[:3, :3].T + S[:3, 3])[0] > FEATURE_MOVE).mean() < FEATURE_SHARE
+                     for S in turns], dtype=bool)
+
+
+# A model's near-symmetries (turns, which of them are exact but for features, axis, slide direction), by
+# model object: Models are immutable.
 _FOUND: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
@@ -169,15 +178,12 @@ class NearSymmetryResolver:
         self.renderer = DepthRenderer(model.vertices, model.faces)
         found = _FOUND.get(model)
         if found is None:  # about 0.1 s a model, so once per model object however many recognizers use it
-            found = _FOUND[model] = (near_symmetries(model.points, model.diameter),
+            turns = near_symmetries(model.points, model.diameter)
+            found = _FOUND[model] = (turns, _exact_but_features(model.points, turns),
                                      near_continuous_axis(model, self.renderer),
                                      near_uniform_direction(model, self.renderer))
-        self.turns, self.axis, self.slide = found
+        self.turns, self._exact_but_features, self.axis, self.slide = found
         self._centre = model.points.mean(axis=0)
-        tree = cKDTree(model.points)
-        self._exact_but_features = np.array([
-            (tree.query(model.points @ S[:3, :3].T + S[:3, 3])[0] > FEATURE_MOVE).mean() < FEATURE_SHARE
-            for S in self.turns], dtype=bool)
 
     def resolve(self, view: SceneView, T_cloud_model: np.ndarray, icp_distance: float) -> tuple[np.ndarray, PoseCheck]:
         """The best pose (4, 4) and its dense :class:`PoseCheck`."""
