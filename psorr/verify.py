@@ -257,8 +257,9 @@ def check_pose(view: SceneView, model_points, model_normals, T_cloud_model, para
 
 def refine_icp(view: SceneView, model_points, model_normals, T_cloud_model, max_distance: float,
                iterations: int = 30, reach: float = 0.03, max_points: int = 3000) -> np.ndarray:
-    """Point-to-plane ICP of (at most about ``max_points`` of) the model's visible points onto the
-    scene points within ``reach`` metres of them; returns the refined pose."""
+    """Point-to-plane ICP (:func:`psorr.icp.register`) of (at most about ``max_points`` of) the model's
+    visible points, less those a nearer measured surface hides, onto the scene points within ``reach``
+    metres of them; returns the refined pose."""
     R, t = T_cloud_model[:3, :3], T_cloud_model[:3, 3]
     stride = max(1, len(model_points) // max_points)
     pts, nrm = model_points[::stride] @ R.T + t, model_normals[::stride] @ R.T
