@@ -93,8 +93,8 @@ class ArmCell:
         self.min_human_clearance = math.inf
         self._next_check = 0.0
         self._arm_geoms = [m.geom(g).id for g in cfg.collision_geoms]
-        # Body ids are depth-first, so the arm's bodies in id order run from the base out to the hand.
-        self._arm_chain = sorted({int(m.geom_bodyid[g]) for g in self._arm_geoms} | {m.body(cfg.base_body).id})
+        self._arm_base = m.body(cfg.base_body).id
+        # Body ids are depth-first, so the arm's geoms in body-id order run from the base out to the hand.
         self._arm_geoms_in_chain = sorted(self._arm_geoms, key=lambda g: int(m.geom_bodyid[g]))
         self._human_geoms = [m.geom(g).id for g in world.occluder_geoms] if human is not None else []
         if human is not None:
@@ -123,7 +123,7 @@ class ArmCell:
         origins alone sit on the joint axes, and the UR5e's upper arm runs up to 0.2 m beside them: a
         person keeping 0.25 m from those reached into the stopped upper arm (2 of 50 episodes)."""
         m, d = self.model, self.data
-        points = [d.xpos[self._arm_chain[0], :2]]
+        points = [d.xpos[self._arm_base, :2]]
         for g in self._arm_geoms_in_chain:
             if m.geom_type[g] in (mujoco.mjtGeom.mjGEOM_CAPSULE, mujoco.mjtGeom.mjGEOM_CYLINDER):
                 half = m.geom_size[g, 1] * d.geom_xmat[g].reshape(3, 3)[:, 2]
