@@ -8,7 +8,8 @@ small features (a window, a gland hole, a row of holes) that only a dense point 
 :func:`near_symmetries` finds, per model, the half turns about its principal axes (through
 the centroid of its samples), each settled onto the model by ICP, that move its surface by little
 on average (an L bracket's legs swap about their bisector, a few degrees off its principal axes);
-exact symmetries qualify too, which is harmless. :func:`near_continuous_axis` finds an axis about
+exact symmetries qualify too, and the resolver drops them (their poses are one part).
+:func:`near_continuous_axis` finds an axis about
 which any turn is a near-symmetry (a flanged hub, whose yaw only its bolt holes fix).
 :func:`near_uniform_direction` finds a direction along which the part slides almost onto itself (a
 U-channel along its length, which only its two end faces fix): ICP cannot place such a part along
@@ -17,7 +18,8 @@ hide part of its faces (:meth:`NearSymmetryResolver.slide_onto_surface` then fin
 before ICP). :class:`NearSymmetryResolver` re-fits each turned pose with ICP, searches the turn about
 the axis or the slide along the direction, and keeps the pose whose rendered depth
 (:mod:`psorr.depth_compare`) agrees best with the measurement where the candidates differ. When the
-features are hidden the poses cannot be told apart, and the original is kept.
+features are hidden the poses cannot be told apart: the original is kept, and the half turns the view
+did not rule out are returned with it, for a detection's ``alternatives``.
 """
 
 from __future__ import annotations
@@ -33,6 +35,9 @@ from psorr.verify import CheckParams, PoseCheck, SceneView, check_pose, refine_i
 
 NEAR_MEAN_DISTANCE = 0.03  # x model diameter: turns moving the surface less than this on average are near-symmetries
 EXACT_DISTANCE = 2e-4  # m: a turn moving no sample further than this from the mesh is an exact symmetry
+# m: a half turn moving no sample further than this from the mesh is a symmetry in all but its facets (a
+# round part's tessellation moves 0.6 mm); the least feature that breaks one in the catalog moves 7 mm.
+FACET_DISTANCE = 1e-3
 AXIS_TEST_DEGREES = (7.0, 19.0, 37.0, 90.0, 143.0)  # turns that must all be near-symmetries for a near-continuous axis
 AXIS_COARSE_DEG, AXIS_FINE_DEG = 4.0, 0.5
 # A slide by TEST_SHIFT x diameter that moves the surface by less than UNIFORM_LIMIT x the slide on average
@@ -50,6 +55,11 @@ FEATURE_MOVE, FEATURE_SHARE = 0.002, 0.1
 # A turned pose replaces the original only when its residual is clearly lower; when the features
 # that tell them apart are hidden the residuals tie, and recognition's own choice stands.
 SWITCH_RATIO = 0.9
+# A turned pose whose residual is within this factor of the chosen one's is not ruled out: the view
+# did not show enough of the features (reported as Detection.alternatives). Over the chassis' views
+# where its end walls are seen edge-on (Table 1's full views, the demo cell's), the wrong end costs
+# 0.97-1.39 times the right one; where they face the sensor (Table 1's partial views), 1.6-3.0.
+UNRESOLVED_RATIO = 1.5
 
 
 def near_symmetries(points: np.ndarray, diameter: float, limit: float = NEAR_MEAN_DISTANCE) -> np.ndarray:
@@ -145,6 +155,14 @@ def near_uniform_direction(model, renderer: DepthRenderer) -> np.ndarray | None:
     return axes[:, k] if moved[k] < UNIFORM_LIMIT else None
 
 
+def _symmetries(renderer: DepthRenderer, points: np.ndarray, turns: np.ndarray) -> np.ndarray:
+    """(K,) bool: does each turn (K, 4, 4) map every sample of ``points`` (N, 3) to within FACET_DISTANCE of
+    the mesh? Such a turn is a symmetry: its poses are the same part, with nothing to tell apart."""
+    subset = points[:: max(1, len(points) // 1500)]
+    return np.array([renderer.distance(subset @ S[:3, :3].T + S[:3, 3]).max() <= FACET_DISTANCE for S in turns],
+                    dtype=bool)
+
+
 def _exact_but_features(points: np.ndarray, turns: np.ndarray) -> np.ndarray:
     """(K,) bool: does each turn (K, 4, 4) move fewer than FEATURE_SHARE of the model's ``points`` (N, 3)
     further than FEATURE_MOVE from the samples?"""
@@ -179,23 +197,28 @@ class NearSymmetryResolver:
         found = _FOUND.get(model)
         if found is None:  # about 0.1 s a model, so once per model object however many recognizers use it
             turns = near_symmetries(model.points, model.diameter)
+            # Exact symmetries (the transformer's, the bushing's) need no choosing: their poses are one part.
+            turns = turns[~_symmetries(self.renderer, model.points, turns)]
             found = _FOUND[model] = (turns, _exact_but_features(model.points, turns),
                                      near_continuous_axis(model, self.renderer),
                                      near_uniform_direction(model, self.renderer))
         self.turns, self._exact_but_features, self.axis, self.slide = found
         self._centre = model.points.mean(axis=0)
 
-    def resolve(self, view: SceneView, T_cloud_model: np.ndarray, icp_distance: float) -> tuple[np.ndarray, PoseCheck]:
-        """The best pose (4, 4) and its dense :class:`PoseCheck`."""
+    def resolve(self, view: SceneView, T_cloud_model: np.ndarray,
+                icp_distance: float) -> tuple[np.ndarray, PoseCheck, tuple[np.ndarray, ...]]:
+        """The best pose (4, 4), its dense :class:`PoseCheck`, and the near-symmetric poses (4, 4) the
+        view could not rule out (its half turns within UNRESOLVED_RATIO of the best's residual)."""
         T = T_cloud_model
         if self.slide is not None:
             T = self._best_slide(view, T)
         if self.axis is not None:
             T = self._best_turn_about_axis(view, T)
+        alternatives = ()
         if len(self.turns):
-            T = self._best_half_turn(view, T, icp_distance)
+            T, alternatives = self._best_half_turn(view, T, icp_distance)
         m = self.model
-        return T, check_pose(view, m.points, m.normals, T, DENSE_CHECK)
+        return T, check_pose(view, m.points, m.normals, T, DENSE_CHECK), alternatives
 
     def _costs(self, view: SceneView, poses: np.ndarray, twins=None) -> np.ndarray:
         centre = poses[0, :3, :3] @ self._centre + poses[0, :3, 3]
@@ -248,7 +271,8 @@ class NearSymmetryResolver:
         scores = [check_pose(view, m.points, m.normals, P, params).score for P in poses]
         return poses[int(np.argmax(scores))]
 
-    def _best_half_turn(self, view: SceneView, T: np.ndarray, icp_distance: float) -> np.ndarray:
+    def _best_half_turn(self, view: SceneView, T: np.ndarray,
+                        icp_distance: float) -> tuple[np.ndarray, tuple[np.ndarray, ...]]:
         m = self.model
         turned = []
         for S in self.turns:
@@ -270,4 +294,9 @@ class NearSymmetryResolver:
             ratios[~exact] = costs[1:] / costs[0] if costs[0] > 0 else np.inf
         k = int(np.argmin(ratios))
         # Ties (the features that tell the poses apart are hidden) keep the pose recognition found.
-        return turned[k] if ratios[k] < SWITCH_RATIO else T
+        if ratios[k] < SWITCH_RATIO:
+            best, others = turned[k], [(T, 1.0 / ratios[k])] + [(P, r / ratios[k]) for j, (P, r) in
+                                                                 enumerate(zip(turned, ratios)) if j != k]
+        else:
+            best, others = T, list(zip(turned, ratios))
+        return best, tuple(P for P, r in others if r < UNRESOLVED_RATIO)

@@ -96,13 +96,13 @@ def residual_costs(view: SceneView, renderer: DepthRenderer, poses: np.ndarray, 
     cost = np.minimum(np.where(np.isfinite(residual), residual**2, RESIDUAL_CAP), RESIDUAL_CAP)
     if twins is not None:
         a, b = np.array(twins).T
-        cost = cost[:, _differs(rendered[a], rendered[b], sigma).any(axis=0)]
+        cost = cost[:, differs(rendered[a], rendered[b], sigma).any(axis=0)]
     elif discriminative:
-        cost = cost[:, _differs(rendered, rendered[:1], sigma).any(axis=0)]
+        cost = cost[:, differs(rendered, rendered[:1], sigma).any(axis=0)]
     return cost.sum(axis=1)
 
 
-def _differs(rendered: np.ndarray, other: np.ndarray, sigma: np.ndarray) -> np.ndarray:
+def differs(rendered: np.ndarray, other: np.ndarray, sigma: np.ndarray) -> np.ndarray:
     """(K, P) where depths ``rendered`` (K, P) and ``other`` (K or 1, P) differ: by more than
     DISCRIMINATIVE_SIGMAS x ``sigma`` (P,), or one hits the model and the other does not."""
     with np.errstate(invalid="ignore"):

@@ -125,6 +125,26 @@ class Recognizer:
                                  self.library.train_ms)
         return Recognition(tuple(detections), stats)
 
+    def refine(self, cloud: PointCloud, model: str, T_cloud_model: np.ndarray) -> Detection:
+        """Judge a known pose of ``model`` in a new view, as recognition judges its candidates: ICP from
+        ``T_cloud_model`` (4, 4) onto ``cloud`` (coarse, then fine), its near-symmetric twins told apart
+        by render and compare, and the dense point check's score. No search: for a robot that looks
+        again at a part it has found, say in its hand and turned so that the features that tell its
+        ends apart (``Detection.alternatives``) face the sensor.
+        """
+        if not isinstance(cloud, PointCloud):
+            raise InvalidInputError(f"refine() takes a psorr.PointCloud, got {type(cloud).__name__}")
+        m = self.library.model(model)
+        T = np.asarray(T_cloud_model, dtype=float)
+        if T.shape != (4, 4) or not np.isfinite(T).all():
+            raise InvalidInputError(f"T_cloud_model must be a finite (4, 4) pose, got shape {T.shape}")
+        p = self.params
+        view = SceneView(cloud)
+        T = refine_icp(view, m.points, m.normals, T, p.icp_distance, iterations=15, max_points=1000)
+        T = refine_icp(view, m.points, m.normals, T, p.icp_distance / 3, max_points=p.icp_points)
+        T, check, alternatives = self._resolvers[m.name].resolve(view, T, p.icp_distance)
+        return Detection(m.name, T, check.score, check.visible_fraction, alternatives)
+
     def _psorr(self, cloud, view, rng):
         p = self.params
         t0 = time.perf_counter()
@@ -285,7 +305,7 @@ class Recognizer:
             claimed[blocks] = True
             # Only now, on the few survivors, is a dense check affordable: it tells a part from its
             # near-symmetric twin pose (a tray turned end for end) by the small features.
-            T, check = self._resolvers[model.name].resolve(view, T, p.icp_distance)
-            detections.append(Detection(model.name, T, check.score, check.visible_fraction))
+            T, check, alternatives = self._resolvers[model.name].resolve(view, T, p.icp_distance)
+            detections.append(Detection(model.name, T, check.score, check.visible_fraction, alternatives))
         return detections, claimed
 

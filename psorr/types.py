@@ -222,6 +222,17 @@ class PrimitiveShapeGraph:
         return sorted({j for i, j in self.edges if i == index} | {i for i, j in self.edges if j == index})
 
 
+def _rigid_pose(value, name: str) -> np.ndarray:
+    """``value`` as a read-only (4, 4) float array, checked to be a rigid transform."""
+    pose = np.array(value, dtype=np.float64)
+    if pose.shape != (4, 4) or not np.isfinite(pose).all():
+        raise InvalidInputError(f"Detection.{name} must be a finite (4, 4) array, got shape {pose.shape}")
+    if not np.allclose(pose[3], (0, 0, 0, 1)) or not np.allclose(pose[:3, :3] @ pose[:3, :3].T, np.eye(3), atol=1e-6):
+        raise InvalidInputError(f"Detection.{name} must be a rigid transform (orthonormal rotation, last row 0 0 0 1)")
+    pose.setflags(write=False)
+    return pose
+
+
 @dataclass(frozen=True, eq=False)
 class Detection:
     """One recognised workpiece instance.
@@ -232,22 +243,23 @@ class Detection:
         score: confidence in [0, 1].
         visible_fraction: the share of the model's surface samples that the
             sensor saw (in front of nothing, matched by a measured point), in [0, 1].
+        alternatives: poses (4, 4) of the same model, each the pose turned by one of the model's
+            near-symmetries (a tray turned end for end), that the view could not rule out: the
+            small features that tell them apart were hidden or seen edge-on. Empty when the view
+            settled it, or the model has no near-symmetry. A robot can look again from elsewhere
+            (``Recognizer.refine`` judges given poses in a new view).
     """
 
     model: str
     T_cloud_model: np.ndarray
     score: float
     visible_fraction: float = 0.0
+    alternatives: tuple = ()
 
     def __post_init__(self):
-        pose = np.array(self.T_cloud_model, dtype=np.float64)
-        if pose.shape != (4, 4) or not np.isfinite(pose).all():
-            raise InvalidInputError(f"T_cloud_model must be a finite (4, 4) array, got shape {pose.shape}")
-        if not np.allclose(pose[3], (0, 0, 0, 1)) or not np.allclose(pose[:3, :3] @ pose[:3, :3].T, np.eye(3),
-                                                                     atol=1e-6):
-            raise InvalidInputError("T_cloud_model must be a rigid transform (orthonormal rotation, last row 0 0 0 1)")
-        pose.setflags(write=False)
-        object.__setattr__(self, "T_cloud_model", pose)
+        object.__setattr__(self, "T_cloud_model", _rigid_pose(self.T_cloud_model, "T_cloud_model"))
+        object.__setattr__(self, "alternatives", tuple(_rigid_pose(P, f"alternatives[{k}]")
+                                                       for k, P in enumerate(self.alternatives)))
         for name in ("score", "visible_fraction"):
             value = float(getattr(self, name))
             if not 0.0 <= value <= 1.0:
