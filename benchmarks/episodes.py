@@ -18,6 +18,7 @@ import json
 import sys
 import time
 from collections import defaultdict
+from dataclasses import asdict
 from pathlib import Path
 
 import _single_core  # noqa: F401  (must precede numpy)
@@ -136,13 +137,18 @@ def main(argv=None) -> int:
         ("recognized place success >= 90%", rec["place_success_rate"] >= TARGETS["place"]),
         ("under 20 s per episode", max(r["wall_s_per_episode"] for r in rows) < TARGETS["wall_s"]),
     ]
+    seen = [p.in_hand for r in results["recognized"] for p in r.picks if p.in_hand is not None]
+    lines += ["", f"Looks in the hand (recognized; a pose whose near-symmetric twin the look left open): {len(seen)}; "
+                  f"held the other way round: {sum(s.chosen > 0 for s in seen)}; "
+                  f"undecided: {sum(not s.settled for s in seen)}"]
     lines += ["", "Targets: " + "; ".join(f"{what}: {'met' if ok else 'MISSED'}" for what, ok in checks)]
     print("\n".join(lines))
 
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "episodes.md").write_text("\n".join(lines) + "\n")
     notes = {m: [{"episode": i, "part": p.part, "grasped": p.grasped, "placed": p.placed,
-                  "pose_error_mm": p.pose_error_mm, "rot_error_deg": p.rot_error_deg, "looks": p.looks, "note": p.note}
+                  "pose_error_mm": p.pose_error_mm, "rot_error_deg": p.rot_error_deg, "looks": p.looks, "note": p.note,
+                  "in_hand": None if p.in_hand is None else asdict(p.in_hand)}
                  for i, r in enumerate(results[m]) for p in r.picks] for m in MODES}
     (args.out / "episodes.json").write_text(json.dumps({"rows": rows, "per_part": per_part, "picks": notes},
                                                        indent=1, default=float))

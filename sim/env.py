@@ -46,7 +46,7 @@ from psorr.kinect_noise import KINECT_V1
 from sim.cell import WorkspaceBlockedError
 from sim.episode import MAX_EPISODE_S, MIN_SCORE, POSE_MODES, Episode
 from sim.grasp_planning import upright_equivalent
-from sim.perception import Look
+from sim.perception import Estimate, Look
 from sim.pick import REST_TOL, PickResult
 from sim.render_backend import ensure_headless_gl
 from sim.world import World, WorldConfig, build_world
@@ -108,7 +108,7 @@ class PickPlaceEnv(gym.Env):
         self.episode: Episode | None = None
         self._renderer: mujoco.Renderer | None = None
         self._look: Look | None = None
-        self._estimates: dict[str, tuple[np.ndarray, float] | None] = {}
+        self._estimates: dict[str, Estimate | None] = {}
         self._done: set[str] = set()
         self._steps = self._looks = 0
 
@@ -144,7 +144,8 @@ class PickPlaceEnv(gym.Env):
                 reward = REFUSED_REWARD
             else:
                 part = self.parts[action]
-                pick = episode.pick(part, self._estimates[part][0], looks=self._looks)
+                chosen = self._estimates[part]
+                pick = episode.pick(part, chosen.T_world_part, looks=self._looks, alternatives=chosen.alternatives)
                 self._done.add(part)
                 self._looks = 0
                 reward = GRASP_REWARD * pick.grasped + PLACE_REWARD * pick.placed
@@ -191,12 +192,7 @@ class PickPlaceEnv(gym.Env):
     def _take_look(self) -> None:
         look = self.episode.look()
         self._looks += 1
-        estimates = {}
-        for part in self.parts:
-            T = self.episode.estimate(look, part)
-            # The score of the very estimate Episode.estimate chose (it returns the pose only).
-            estimates[part] = None if T is None else (T, next(s for E, s in look.estimates[part] if E is T))
-        self._look, self._estimates = look, estimates
+        self._look, self._estimates = look, {part: self.episode.estimate(look, part) for part in self.parts}
 
     def _refusal(self, part: str) -> str:
         """Why a pick of ``part`` now would be refused ("" if it would not)."""
@@ -217,7 +213,7 @@ class PickPlaceEnv(gym.Env):
         for i, part in enumerate(self.parts):
             if self._estimates[part] is not None:
                 seen[i] = 1
-                T, scores[i] = self._estimates[part]
+                T, scores[i], _ = self._estimates[part]
                 T = upright_equivalent(np.asarray(T, float), self.world.catalog[part])
                 q = np.zeros(4)
                 mujoco.mju_mat2Quat(q, np.ascontiguousarray(T[:3, :3]).ravel())

@@ -27,7 +27,7 @@ import numpy as np
 from psorr.errors import InvalidInputError
 from sim.cell import ArmCell, Recorder, WorkspaceBlockedError
 from sim.human import ReachingHuman
-from sim.perception import Look, Perception
+from sim.perception import Estimate, Look, Perception
 from sim.pick import PickResult, fixture_error, pick_and_place, pose_error, resting_on_table
 from sim.world import World
 
@@ -116,7 +116,7 @@ class Episode:
             look = self.perception.look(data, self.cell.holding)
         else:
             occupied = self.cell.monitor is not None and self.perception.occupied(data, self.cell.holding)
-            truth = {} if occupied else {p: ((self.world.body_pose(p), 1.0),) for p in self.remaining}
+            truth = {} if occupied else {p: (Estimate(self.world.body_pose(p), 1.0),) for p in self.remaining}
             look = Look(None, (), MappingProxyType(truth), 0, occupied)
         self.looks += 1
         self.occupied_looks += look.occupied
@@ -125,22 +125,26 @@ class Episode:
         self.cell.hold(THINK_S)
         return look
 
-    def estimate(self, look: Look, part: str) -> np.ndarray | None:
-        """The pose (4, 4, world) to grasp ``part`` from: its best detection in ``look`` that scores at
-        least MIN_SCORE and stands upright on the table (parts rest there; anything else is a mistake)."""
-        for T, score in look.estimates.get(part, ()):
-            if score >= MIN_SCORE and resting_on_table(self.world, T, part):
-                return T
+    def estimate(self, look: Look, part: str) -> Estimate | None:
+        """The estimate to grasp ``part`` from: its best detection in ``look`` that scores at least
+        MIN_SCORE and stands upright on the table (parts rest there; anything else is a mistake)."""
+        for estimate in look.estimates.get(part, ()):
+            if estimate.score >= MIN_SCORE and resting_on_table(self.world, estimate.T_world_part, part):
+                return estimate
         return None
 
     def wait(self, seconds: float = WAIT_S) -> None:
         self.cell.hold(seconds)
 
-    def pick(self, part: str, T_world_part: np.ndarray, looks: int = 1) -> PickResult:
-        """Pick-and-place ``part`` from the estimate; it leaves the remaining list whatever happens."""
+    def pick(self, part: str, T_world_part: np.ndarray, looks: int = 1,
+             alternatives: tuple[np.ndarray, ...] = ()) -> PickResult:
+        """Pick-and-place ``part`` from the pose (4, 4, world); it leaves the remaining list whatever happens.
+        With ``alternatives`` (the pose's near-symmetric twins the look could not rule out) and
+        recognition on, the robot looks at the part in its hand before placing it (:mod:`sim.in_hand`)."""
         if part not in self.remaining:
             raise InvalidInputError(f"{part!r} is not waiting to be picked; remaining: {self.remaining}")
-        result = pick_and_place(self.world, part, T_world_part, self.cell)
+        result = pick_and_place(self.world, part, T_world_part, self.cell, alternatives,
+                                self.perception if self.poses == "recognized" else None)
         result = replace(result, looks=looks)
         self.remaining.remove(part)
         self.picks.append(result)
@@ -165,7 +169,7 @@ class Episode:
                 if look.occupied:
                     self.wait()
                     continue
-                choice = next(((p, T) for p in self.remaining if (T := self.estimate(look, p)) is not None), None)
+                choice = next(((p, e) for p in self.remaining if (e := self.estimate(look, p)) is not None), None)
                 if choice is None:
                     blind += 1
                     if blind >= MAX_BLIND_LOOKS:
@@ -179,7 +183,8 @@ class Episode:
                     self.occupied_looks += 1
                     self.wait()
                     continue
-                self.pick(*choice, looks=looks)
+                part, estimate = choice
+                self.pick(part, estimate.T_world_part, looks=looks, alternatives=estimate.alternatives)
                 blind = looks = 0
         except WorkspaceBlockedError as exc:
             self.give_up(str(exc))

@@ -108,12 +108,7 @@ def plan_grasp(cell: ArmCell, part: str, T_est: np.ndarray) -> tuple[GraspPlan |
                     break
                 T_grasp = shift(T_grasp, [0, 0, short])
             T_part_tool = np.linalg.inv(T_est) @ T_grasp
-            for S in info.symmetries:
-                T_place = T_fix @ S @ T_part_tool
-                if T_place[2, 2] > -0.7:
-                    continue
-                clears = pads_clear_fixture(cell, info, S @ T_part_tool, grasp.width)
-                turn = angle_deg(T_grasp[:3, :3].T @ T_place[:3, :3])  # prefer the wrist turning least
+            for T_place, clears, turn in place_poses(cell, info, T_fix, T_part_tool, grasp.width, T_grasp):
                 candidates.append(((not clears, index, turn), grasp, flip, T_grasp, T_place, clears))
     candidates.sort(key=lambda c: c[0])
     for _, grasp, flip, T_grasp, T_place, clears in candidates:
@@ -132,6 +127,41 @@ def plan_grasp(cell: ArmCell, part: str, T_est: np.ndarray) -> tuple[GraspPlan |
             continue
         return GraspPlan(grasp, T_grasp, T_place, q_pre, q_grasp, q_above, clears), ""
     return None, "; ".join(reasons) or "the part has no grasps"
+
+
+def place_poses(cell: ArmCell, info, T_fix: np.ndarray, T_part_tool: np.ndarray, width: float,
+                T_grasp: np.ndarray) -> list[tuple[np.ndarray, bool, float]]:
+    """The tool poses (4, 4, world) that seat a part held at ``T_part_tool`` (the tool in the part's frame)
+    in its fixture ``T_fix``, one per symmetry of the part whose tool approach points down; each with
+    whether the pads clear the fixture's walls, and the wrist's turn (deg) from ``T_grasp``."""
+    out = []
+    for S in info.symmetries:
+        T_place = T_fix @ S @ T_part_tool
+        if T_place[2, 2] > -0.7:
+            continue
+        clears = pads_clear_fixture(cell, info, S @ T_part_tool, width)
+        out.append((T_place, clears, angle_deg(T_grasp[:3, :3].T @ T_place[:3, :3])))  # prefer the wrist turning least
+    return out
+
+
+def replan_place(cell: ArmCell, part: str, grasp: Grasp, T_part_tool: np.ndarray, q_start: np.ndarray,
+                 T_grasp: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool] | None:
+    """For a part found, once in the hand, to be held at ``T_part_tool`` rather than as planned: the
+    place pose (4, 4), the joints (nq,) above it at the transport height (from ``q_start``), and whether
+    the pads clear the fixture; None if no seat is reachable."""
+    world = cell.world
+    info = world.catalog[part]
+    options = place_poses(cell, info, world.T_world_fixtures[part], T_part_tool, grasp.width, T_grasp)
+    for T_place, clears, _ in sorted(options, key=lambda o: (not o[1], o[2])):
+        try:
+            T_above = shift(T_place, [0, 0, T_grasp[2, 3] + LIFT - T_place[2, 3]])
+            q_above = cell.solve(q_start, T_above)
+            q_place = cell.solve(q_above, T_place)
+        except UnreachableTargetError:
+            continue
+        if not (configuration_problem(cell, q_above) or configuration_problem(cell, q_place)):
+            return T_place, q_above, clears
+    return None
 
 
 def configuration_problem(cell: ArmCell, q: np.ndarray) -> str:

@@ -18,11 +18,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from types import MappingProxyType
+from typing import NamedTuple
 
 import mujoco
 import numpy as np
 
 from psorr.camera import CameraIntrinsics
+from psorr.errors import InvalidInputError
 from psorr.kinect_noise import KINECT_V1
 from psorr.types import Detection, PointCloud
 from sim.ik import T_world_site
@@ -36,6 +38,21 @@ MONITOR_CAMERA = CameraIntrinsics(width=160, height=120, fx=131.25, fy=131.25, c
 """The monitor's depth stream: the Kinect's field of view at a quarter of its resolution."""
 
 
+class Estimate(NamedTuple):
+    """One detection of a part, in the world frame.
+
+    Attributes:
+        T_world_part: (4, 4) the part's pose.
+        score: the detection's score, in [0, 1].
+        alternatives: its near-symmetric twins (4, 4, world) that the look could not rule out
+            (:attr:`psorr.types.Detection.alternatives`).
+    """
+
+    T_world_part: np.ndarray
+    score: float
+    alternatives: tuple = ()
+
+
 @dataclass(frozen=True, eq=False)
 class Look:
     """One look at the cell before a pick.
@@ -43,7 +60,7 @@ class Look:
     Attributes:
         frame: the Kinect frame (None when the look was an oracle's occupancy check only).
         detections: PSORR's detections in the camera frame (empty for the oracle).
-        estimates: per part, its detections' world poses (4, 4) and scores, best first.
+        estimates: per part, its detections as :class:`Estimate` s, best score first.
         intruding: how many points are above the workspace that neither a part nor the robot explains.
         occupied: ``intruding`` reaches the threshold: someone is reaching in.
     """
@@ -112,9 +129,26 @@ class Perception:
             detections = tuple(self._recognizer.recognize(cloud, self.rng).detections)
             for det in detections:
                 if det.model in self.world.workpieces:
-                    estimates.setdefault(det.model, []).append((T @ np.asarray(det.T_cloud_model), det.score))
-        estimates = {k: tuple(sorted(v, key=lambda e: -e[1])) for k, v in estimates.items()}
+                    estimates.setdefault(det.model, []).append(
+                        Estimate(T @ det.T_cloud_model, det.score, tuple(T @ A for A in det.alternatives)))
+        estimates = {k: tuple(sorted(v, key=lambda e: -e.score)) for k, v in estimates.items()}
         return Look(frame, detections, MappingProxyType(estimates), intruding, bool(occupied))
+
+    def look_at_held(self, data: mujoco.MjData, part: str, T_world_part: np.ndarray) -> tuple[Detection, np.ndarray]:
+        """Render the Kinect and refine the pose (4, 4, world) of ``part``, held up in the hand, from
+        ``T_world_part`` (PSORR's :meth:`~psorr.recognize.Recognizer.refine`). The cloud is the look's
+        crop without its ceiling (the part is above it) and without the arm's pixels (the fingers'
+        included). Returns the detection (camera frame) and ``T_world_camera`` (4, 4)."""
+        if self._recognizer is None:
+            raise InvalidInputError("look_at_held needs a Perception built with recognize=True")
+        frame = self.camera.render(data, self.rng, KINECT_V1, rgb=False)
+        T = frame.T_world_camera
+        world_pts = frame.cloud.points @ T[:3, :3].T + T[:3, 3]
+        with np.errstate(invalid="ignore"):
+            keep = (np.isfinite(world_pts[:, 2]) & self._in_workspace(world_pts)
+                    & ~np.isin(frame.segmentation.ravel(), np.concatenate([self._arm_bodies, self._fixture_bodies])))
+        cloud = _masked(frame.cloud, keep)
+        return self._recognizer.refine(cloud, part, np.linalg.inv(T) @ T_world_part), T
 
     def _in_workspace(self, world_pts: np.ndarray) -> np.ndarray:
         hx, hy = (v / 2 for v in self.world.config.table_size)

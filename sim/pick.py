@@ -17,8 +17,18 @@ import numpy as np
 from psorr.errors import InvalidInputError
 from psorr.workpieces import symmetry_transforms
 from sim.cell import ArmCell, WorkspaceBlockedError, kinematics
-from sim.grasp_planning import LIFT, PRE_GRASP, WALL_CLEARANCE, angle_deg, plan_grasp, shift, upright_equivalent
+from sim.grasp_planning import (
+    LIFT,
+    PRE_GRASP,
+    WALL_CLEARANCE,
+    angle_deg,
+    plan_grasp,
+    replan_place,
+    shift,
+    upright_equivalent,
+)
 from sim.ik import T_world_site, UnreachableTargetError
+from sim.in_hand import InHandLook, look_in_hand
 from sim.world import World
 
 MIN_LIFT = 0.05  # m the part must rise to count as grasped
@@ -41,9 +51,12 @@ class PickResult:
         placed: after release and a settle the part sits in its fixture (within 5 mm and 3 deg of
             yaw, modulo its symmetries) and rests on the table.
         place_error_mm, place_error_deg: the final true pose against the fixture pose (nan if never placed).
-        pose_error_mm, rot_error_deg: the pose estimate used against the true start pose (0 for the oracle).
+        pose_error_mm, rot_error_deg: the pose estimate the pick was planned from against the true start
+            pose (0 for the oracle), before any look in the hand.
         note: what happened, for the log.
         looks: how many times the robot looked at the cell before committing to this pick.
+        in_hand: the look at the held part that told its near-symmetric twins apart (None if the
+            estimate had no twin left to rule out, or there was nobody to look).
     """
 
     part: str
@@ -57,6 +70,7 @@ class PickResult:
     rot_error_deg: float
     note: str
     looks: int = 1
+    in_hand: InHandLook | None = None
 
 
 def pose_error(T_est: np.ndarray, T_true: np.ndarray, info) -> tuple[float, float]:
@@ -96,12 +110,18 @@ def resting_on_table(world: World, T_world_part: np.ndarray, part: str) -> bool:
 
 
 def pick_and_place(world: World, part: str, T_world_part_estimate: np.ndarray,
-                   cell: ArmCell | None = None) -> PickResult:
+                   cell: ArmCell | None = None, alternatives: tuple[np.ndarray, ...] = (),
+                   perception=None) -> PickResult:
     """Pick ``part`` using the pose estimate and seat it in its fixture; checks read the simulator.
 
     ``world.data`` is stepped in place (the arm ends retreated above the fixture) through ``cell``
     (default: a new :class:`ArmCell` with no human, monitor or recorder). The execution is
     deterministic. A protective stop that lasts too long ends the pick unfinished.
+
+    ``alternatives`` are the estimate's near-symmetric twins (4, 4, world) that the look could not
+    rule out. Given them and a recognising ``perception`` (:class:`sim.perception.Perception`), the
+    robot turns the part in its hand after the lift and looks again (:mod:`sim.in_hand`), and seats
+    it the way round that look finds.
     """
     if part not in world.workpieces:
         raise InvalidInputError(f"unknown part {part!r}; the world has {list(world.workpieces)}")
@@ -110,13 +130,17 @@ def pick_and_place(world: World, part: str, T_world_part_estimate: np.ndarray,
     cell = ArmCell(world) if cell is None else cell
     info = world.catalog[part]
     T_est = upright_equivalent(np.asarray(T_world_part_estimate, float), info)
+    twins = [upright_equivalent(np.asarray(T, float), info) for T in alternatives] if perception is not None else []
     body = world.model.body(part).id
     mujoco.mj_forward(world.model, world.data)
     T_start = world.body_pose(part)
     pos_mm, rot_deg = pose_error(T_est, T_start, info)
 
+    seen_in_hand = None
+
     def result(grasp="", grasped=False, lifted=0.0, placed=False, pe=math.nan, pd=math.nan, note=""):
-        return PickResult(part, grasp, grasped, float(lifted), placed, float(pe), float(pd), pos_mm, rot_deg, note)
+        return PickResult(part, grasp, grasped, float(lifted), placed, float(pe), float(pd), pos_mm, rot_deg, note,
+                          in_hand=seen_in_hand)
 
     if not resting_on_table(world, T_est, part):
         return result(note=f"estimate not resting upright on the table (z {T_est[2, 3] - world.table_top:+.3f} m "
@@ -141,6 +165,7 @@ def pick_and_place(world: World, part: str, T_world_part_estimate: np.ndarray,
         return result(g.name, False, lifted, note=why)
 
     def execute() -> PickResult:
+        nonlocal seen_in_hand
         cell.gripper_to(world.arm.gripper_open, 0.2)
         # Pre-grasp in joint space, then a straight approach.
         cell.move_joints(plan.q_pre[cell.qadr], ramp_s=1.5)
@@ -162,20 +187,33 @@ def pick_and_place(world: World, part: str, T_world_part_estimate: np.ndarray,
             return give_up(lifted, f"grasp failed: both pads on the part at closing {touching}, "
                                    f"after the lift {held}; lifted {lifted * 100:.1f} cm")
         grip = "" if touching else "both pads touched only after the lift began; "
+        T_place, q_place_above, pads_clear, T_carry, q_carry = plan.T_place, plan.q_place_above, \
+            plan.pads_clear_fixture, T_lift, qs[-1]
+        if twins:
+            T_tool_parts = [np.linalg.inv(plan.T_grasp) @ T for T in [T_est, *twins]]
+            seen_in_hand, q_carry, T_carry = look_in_hand(cell, perception, part, q_carry, T_lift, T_tool_parts)
+            grip += seen_in_hand.summary() + "; "
+            if seen_in_hand.chosen:
+                T_part_tool = np.linalg.inv(T_tool_parts[seen_in_hand.chosen])
+                replanned = replan_place(cell, part, g, T_part_tool, q_carry, plan.T_grasp)
+                if replanned is None:  # seated as first planned, rather than dropped from the lift height
+                    grip += "held the other way round, but no seat for it that way is reachable; "
+                else:
+                    T_place, q_place_above, pads_clear = replanned
         # Transport at the lift height along an arc about the base, then descend.
-        T_above = shift(plan.T_place, [0, 0, T_lift[2, 3] - plan.T_place[2, 3]])
+        T_above = shift(T_place, [0, 0, T_lift[2, 3] - T_place[2, 3]])
         try:
-            qs = cell.path(qs[-1], T_lift, T_above, arc=True)
+            qs = cell.path(q_carry, T_carry, T_above, arc=True)
         except UnreachableTargetError:  # no continuous arc: one joint-space move to the planned configuration
-            qs = [plan.q_place_above]
+            qs = [q_place_above]
         cell.follow(qs, 2.5)
         if not (cell.pads_touch(body) and world.body_pose(part)[2, 3] - T_start[2, 3] >= MIN_LIFT):
             return give_up(lifted, "dropped during transport")
         # Release just above seating, or higher when the pads would otherwise land on the fixture's walls
         # (they stick out past the part along the closing direction, further than the pocket's clearance).
         wall_top = world.table_top + world.config.fixture_wall[1] + WALL_CLEARANCE
-        drop = 0.002 if plan.pads_clear_fixture else max(0.002, wall_top - (plan.T_place[2, 3] - cell.pad_reach))
-        T_release = shift(plan.T_place, [0, 0, drop])
+        drop = 0.002 if pads_clear else max(0.002, wall_top - (T_place[2, 3] - cell.pad_reach))
+        T_release = shift(T_place, [0, 0, drop])
         qs = cell.path(qs[-1], T_above, T_release)
         cell.follow(qs, 1.2)
         cell.gripper_to(min(world.arm.gripper_open, g.width + 0.012), 0.3, ramp_s=0.3)  # ease off, no fling

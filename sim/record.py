@@ -127,7 +127,7 @@ class EpisodeRecorder:
         else:  # the oracle: no frame, the true poses; draw them on the camera's RGB
             rgb, depth_shade = self._render(world, data, world.camera_name), None
             T_camera_world = np.linalg.inv(world.T_world_camera)
-            models = [(part, ests[0][1], self._points(world, None, part), T_camera_world @ ests[0][0])
+            models = [(part, ests[0].score, self._points(world, None, part), T_camera_world @ ests[0].T_world_part)
                       for part, ests in look.estimates.items()]
         scale = rgb.shape[1] / world.config.intrinsics.width
         overlays = tuple(ModelOverlay(name, float(score), project_points(pts, T, world, scale))

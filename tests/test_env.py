@@ -136,9 +136,9 @@ def test_an_oracle_run_picks_every_part_from_the_latest_look(monkeypatch):
         latest[:] = [real_look(self)]
         return latest[0]
 
-    def spy_pick(self, part, T, looks=1):
-        picked.append(any(E is T for E, _ in latest[0].estimates[part]))
-        return real_pick(self, part, T, looks)
+    def spy_pick(self, part, T, looks=1, alternatives=()):
+        picked.append(any(e.T_world_part is T for e in latest[0].estimates[part]))
+        return real_pick(self, part, T, looks, alternatives)
 
     monkeypatch.setattr(Episode, "look", spy_look)
     monkeypatch.setattr(Episode, "pick", spy_pick)

@@ -80,9 +80,9 @@ def test_recognized_episode_picks_only_recognised_poses(monkeypatch):
         looks.append(look)
         return look
 
-    def spy_pick(world, part, T_est, cell=None):
+    def spy_pick(world, part, T_est, cell=None, alternatives=(), perception=None):
         picked.append((part, np.array(T_est), looks[-1]))
-        return real_pick(world, part, T_est, cell)
+        return real_pick(world, part, T_est, cell, alternatives, perception)
 
     monkeypatch.setattr(Perception, "look", spy_look)
     monkeypatch.setattr(episode, "pick_and_place", spy_pick)
@@ -91,7 +91,7 @@ def test_recognized_episode_picks_only_recognised_poses(monkeypatch):
     assert sorted(p.part for p in result.picks) == sorted(PARTS)
     assert result.looks == len(looks) >= 1
     for part, T_est, look in picked:
-        assert any(np.array_equal(T_est, T) for T, _ in look.estimates[part])
+        assert any(np.array_equal(T_est, e.T_world_part) for e in look.estimates[part])
     for pick in result.picks:
         if pick.part in [part for part, _, _ in picked]:
             assert math.isfinite(pick.pose_error_mm) and math.isfinite(pick.rot_error_deg)

@@ -87,7 +87,7 @@ def test_the_recognizer_sees_only_the_workspace(world):
     assert not look.occupied
     assert set(look.estimates) <= set(PARTS)
     for estimates in look.estimates.values():
-        scores = [score for _, score in estimates]
+        scores = [e.score for e in estimates]
         assert scores == sorted(scores, reverse=True)
 
 

@@ -11,7 +11,7 @@ import trimesh
 from psorr.errors import PsorrError
 from psorr.types import Detection
 from sim.episode import run_episode
-from sim.perception import Look
+from sim.perception import Estimate, Look
 from sim.record import EpisodeRecorder, RecordingError
 from sim.sensor import DepthCamera
 from sim.world import WorldConfig, build_world
@@ -75,7 +75,7 @@ def test_overlays_land_on_the_part_in_the_image(tmp_path):
     points = trimesh.sample.sample_surface(world.catalog["u_channel"].load_mesh(), 2000, seed=1)[0]
     library = SimpleNamespace(model=lambda name: SimpleNamespace(points=points))
     recognised = Look(frame, (Detection("u_channel", T_camera_part, 0.9),), MappingProxyType({}), 0, False)
-    oracle = Look(None, (), MappingProxyType({"u_channel": ((T_world_part, 1.0),)}), 0, False)
+    oracle = Look(None, (), MappingProxyType({"u_channel": (Estimate(T_world_part, 1.0),)}), 0, False)
     recorder = EpisodeRecorder(tmp_path, "looks")
     recorder.looked(world, world.data, recognised, library)
     recorder.looked(world, world.data, oracle, None)
