@@ -39,6 +39,7 @@ def cells(runs) -> list[dict]:
             # A run with no hypotheses has no verification time per hypothesis.
             verify_ms=_median([r["verify_ms_per_hypothesis"] for r in rs if r["hypotheses"] > 0]),
             recognised=len(hit), wrong=sum(r["wrong"] for r in rs),
+            twin_open=sum(r["twin_open"] for r in rs), twin_true=sum(r["twin_true"] for r in rs),
             add_mm=_median([r["add_mm"] for r in hit]), rot_deg=_median([r["rot_deg"] for r in hit]),
             best_add_mm=_median([r["add_mm"] for r in rs]),
             total_ms=_median([r["total_ms"] for r in rs])))
@@ -48,8 +49,8 @@ def cells(runs) -> list[dict]:
 def table_markdown(rows) -> str:
     lines = ["| object | view | resolution (points / on the part) | algorithm | hypotheses | verify ms / hyp "
              "| recognised "
-             "| ADD mm | rot err deg | wrong-model dets | total ms |",
-             "|---|---|---|---|---:|---:|---|---:|---:|---:|---:|"]
+             "| twin left open (the truth, of misses) | ADD mm | rot err deg | wrong-model dets | total ms |",
+             "|---|---|---|---|---:|---:|---|---|---:|---:|---:|---:|"]
     for r in rows:
         add = _fmt(r["add_mm"], ".1f")
         if r["add_mm"] is None and r["best_add_mm"] is not None:
@@ -59,7 +60,8 @@ def table_markdown(rows) -> str:
             f"| {r['method']} "
             f"| {_fmt(r['hypotheses'], '.0f')} | {_fmt(r['verify_ms'], '.3f')} "
             f"| {'yes' if r['recognised'] == r['n'] else 'no' if r['recognised'] == 0 else 'partly'} "
-            f"{r['recognised']}/{r['n']} | {add} | {_fmt(r['rot_deg'], '.1f')} | {r['wrong']} "
+            f"{r['recognised']}/{r['n']} | {r['twin_open']}/{r['n']} ({r['twin_true']}) | {add} "
+            f"| {_fmt(r['rot_deg'], '.1f')} | {r['wrong']} "
             f"| {_fmt(r['total_ms'], '.0f')} |")
     return "\n".join(lines)
 
