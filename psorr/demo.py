@@ -65,7 +65,7 @@ def _recognise(cloud, scene, catalog) -> None:
     print(f"\nRecognition with {len(library)} CAD-trained models (PSORR): {len(result.detections)} detections, "
           f"{stats.hypotheses} hypotheses, {stats.verify_ms_per_hypothesis:.1f} ms box verification each, "
           f"{stats.total_ms:.0f} ms in all\n")
-    print(f"{'detection':<15} {'score':>5} {'seen':>5} {'ADD mm':>7} {'ADD/d':>6}  verdict")
+    print(f"{'detection':<15} {'score':>5} {'seen':>5} {'ADD mm':>7} {'ADD/d':>6} {'twins open':>10}  verdict")
     found = set()
     for det in result.detections:
         model = library.model(det.model)
@@ -76,7 +76,7 @@ def _recognise(cloud, scene, catalog) -> None:
         if ok:
             found.add(k)
         print(f"{det.model:<15} {det.score:>5.2f} {det.visible_fraction:>5.2f} {add * 1e3:>7.1f} "
-              f"{add / model.diameter:>6.3f}  {'correct' if ok else 'WRONG'}")
+              f"{add / model.diameter:>6.3f} {len(det.alternatives):>10}  {'correct' if ok else 'WRONG'}")
     missed = [inst.name for k, inst in enumerate(scene.instances) if k not in found]
     print(f"found {len(found)} of {len(scene.instances)} parts; missed: {', '.join(missed) or 'none'}")
     overlay = save_detections_png(OUT / "workpieces_recognition.png", cloud, result.detections, library)
