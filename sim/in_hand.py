@@ -86,7 +86,7 @@ def telling_pixels(renderer: DepthRenderer, T_camera_parts: np.ndarray, intrinsi
 
 
 def look_in_hand(cell: ArmCell, perception, part: str, q: np.ndarray, T_world_tool: np.ndarray,
-                 T_tool_parts: list[np.ndarray]) -> tuple[InHandLook, np.ndarray, np.ndarray]:
+                 T_tool_parts: list[np.ndarray]) -> InHandLook:
     """Turn the held ``part`` about the vertical to show the twins' differences, look, and judge.
 
     Args:
@@ -95,9 +95,8 @@ def look_in_hand(cell: ArmCell, perception, part: str, q: np.ndarray, T_world_to
         T_tool_parts: the twins as held, (4, 4) each in the tool frame; the first is the pose the pick
             was planned from.
 
-    Returns the decision, and the joints (nq,) and tool pose (4, 4) the arm holds the part at after
-    it: those it was given, as the arm turns the part back for the transport (a transport planned
-    from the turned wrist can run it into its joint limit).
+    The arm ends where it started, at ``q``: a transport planned from the turned wrist can run the
+    wrist into its joint limit.
     """
     world = cell.world
     model = perception.library.model(part)
@@ -121,7 +120,7 @@ def look_in_hand(cell: ArmCell, perception, part: str, q: np.ndarray, T_world_to
             best = (-neg_n, yaw, T_tool, q_show)
             break
     if best is None:
-        return InHandLook(0, 0.0, 0, 0.0, False), q, T_world_tool
+        return InHandLook(0, 0.0, 0, 0.0, False)
     n, yaw, T_tool, q_show = best
     cell.follow([q_show], TURN_S)
     cell.hold(SETTLE_S)
@@ -132,4 +131,4 @@ def look_in_hand(cell: ArmCell, perception, part: str, q: np.ndarray, T_world_to
     settled = not detection.alternatives and detection.score >= MIN_SCORE
     chosen = int(np.argmin(turns)) if settled else 0
     cell.follow([q], TURN_S)
-    return InHandLook(chosen, float(yaw), n, detection.score, settled), q, T_world_tool
+    return InHandLook(chosen, float(yaw), n, detection.score, settled)

@@ -187,15 +187,14 @@ def pick_and_place(world: World, part: str, T_world_part_estimate: np.ndarray,
             return give_up(lifted, f"grasp failed: both pads on the part at closing {touching}, "
                                    f"after the lift {held}; lifted {lifted * 100:.1f} cm")
         grip = "" if touching else "both pads touched only after the lift began; "
-        T_place, q_place_above, pads_clear, T_carry, q_carry = plan.T_place, plan.q_place_above, \
-            plan.pads_clear_fixture, T_lift, qs[-1]
+        T_place, q_place_above, pads_clear = plan.T_place, plan.q_place_above, plan.pads_clear_fixture
         if twins:
             T_tool_parts = [np.linalg.inv(plan.T_grasp) @ T for T in [T_est, *twins]]
-            seen_in_hand, q_carry, T_carry = look_in_hand(cell, perception, part, q_carry, T_lift, T_tool_parts)
+            seen_in_hand = look_in_hand(cell, perception, part, qs[-1], T_lift, T_tool_parts)
             grip += seen_in_hand.summary() + "; "
             if seen_in_hand.chosen:
                 T_part_tool = np.linalg.inv(T_tool_parts[seen_in_hand.chosen])
-                replanned = replan_place(cell, part, g, T_part_tool, q_carry, plan.T_grasp)
+                replanned = replan_place(cell, part, g, T_part_tool, qs[-1], plan.T_grasp)
                 if replanned is None:  # seated as first planned, rather than dropped from the lift height
                     grip += "held the other way round, but no seat for it that way is reachable; "
                 else:
@@ -203,7 +202,7 @@ def pick_and_place(world: World, part: str, T_world_part_estimate: np.ndarray,
         # Transport at the lift height along an arc about the base, then descend.
         T_above = shift(T_place, [0, 0, T_lift[2, 3] - T_place[2, 3]])
         try:
-            qs = cell.path(q_carry, T_carry, T_above, arc=True)
+            qs = cell.path(qs[-1], T_lift, T_above, arc=True)
         except UnreachableTargetError:  # no continuous arc: one joint-space move to the planned configuration
             qs = [q_place_above]
         cell.follow(qs, 2.5)
