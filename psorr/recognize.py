@@ -138,12 +138,22 @@ class Recognizer:
         T = np.asarray(T_cloud_model, dtype=float)
         if T.shape != (4, 4) or not np.isfinite(T).all():
             raise InvalidInputError(f"T_cloud_model must be a finite (4, 4) pose, got shape {T.shape}")
-        p = self.params
         view = SceneView(cloud)
-        T = refine_icp(view, m.points, m.normals, T, p.icp_distance, iterations=15, max_points=1000)
-        T = refine_icp(view, m.points, m.normals, T, p.icp_distance / 3, max_points=p.icp_points)
-        T, check, alternatives = self._resolvers[m.name].resolve(view, T, p.icp_distance)
-        return Detection(m.name, T, check.score, check.visible_fraction, alternatives)
+        return self._resolved(view, m, self._fine_icp(view, m, self._coarse_icp(view, m, T)))
+
+    def _coarse_icp(self, view, model, T):
+        # 1000 model points and 15 iterations: enough to tell the hopeless candidates (see _accept).
+        return refine_icp(view, model.points, model.normals, T, self.params.icp_distance, iterations=15,
+                          max_points=1000)
+
+    def _fine_icp(self, view, model, T):
+        p = self.params
+        return refine_icp(view, model.points, model.normals, T, p.icp_distance / 3, max_points=p.icp_points)
+
+    def _resolved(self, view, model, T) -> Detection:
+        """The detection at ``T``, or at the near-symmetric twin the view prefers, with those it left open."""
+        T, check, alternatives = self._resolvers[model.name].resolve(view, T, self.params.icp_distance)
+        return Detection(model.name, T, check.score, check.visible_fraction, alternatives)
 
     def _psorr(self, cloud, view, rng):
         p = self.params
@@ -277,8 +287,7 @@ class Recognizer:
             model = self.library.models[model_index]
             # A part that slides almost onto itself (a channel) is placed along its length by the data first.
             T = self._resolvers[model.name].slide_onto_surface(view, T, _COARSE)
-            # Coarse: 1000 model points and 15 iterations, enough to tell the hopeless candidates (below).
-            T = refine_icp(view, model.points, model.normals, T, p.icp_distance, iterations=15, max_points=1000)
+            T = self._coarse_icp(view, model, T)
             # Most candidates are wrong, and one coarse ICP shows it: too little of the model is measured
             # (of its surface, and of what nearer ones leave in view), or the sensor sees through too much
             # of it. The fine pass is kept for the rest.
@@ -287,7 +296,7 @@ class Recognizer:
                         and coarse.unblocked_fraction < p.min_unblocked_fraction / 2)
             if hopeless or coarse.violation_ratio > max_violation:
                 continue
-            T = refine_icp(view, model.points, model.normals, T, p.icp_distance / 3, max_points=p.icp_points)
+            T = self._fine_icp(view, model, T)
             check = check_pose(view, model.points, model.normals, T, p.check)
             seen_enough = (check.visible_fraction >= p.min_visible_fraction
                            or check.unblocked_fraction >= p.min_unblocked_fraction)
@@ -305,7 +314,6 @@ class Recognizer:
             claimed[blocks] = True
             # Only now, on the few survivors, is a dense check affordable: it tells a part from its
             # near-symmetric twin pose (a tray turned end for end) by the small features.
-            T, check, alternatives = self._resolvers[model.name].resolve(view, T, p.icp_distance)
-            detections.append(Detection(model.name, T, check.score, check.visible_fraction, alternatives))
+            detections.append(self._resolved(view, model, T))
         return detections, claimed
 

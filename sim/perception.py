@@ -113,19 +113,13 @@ class Perception:
         NaN, so the cloud stays organised.
         """
         frame = self.camera.render(data, self.rng, KINECT_V1, rgb=self.rgb)
-        pts = frame.cloud.points
         T = frame.T_world_camera
-        world_pts = pts @ T[:3, :3].T + T[:3, 3]  # NaN rows stay NaN
-        own = np.isin(frame.segmentation.ravel(), self._arm_bodies)
-        valid = np.isfinite(pts[:, 2]) & ~own
+        world_pts, valid = self._world_points(frame)
         intruding = self._count_intruding(world_pts[valid], data, holding)
-        occupied = intruding >= INTRUSION_FRACTION * len(pts)
+        occupied = intruding >= INTRUSION_FRACTION * len(world_pts)
         detections, estimates = (), {}
         if self._recognizer is not None and not occupied:
-            with np.errstate(invalid="ignore"):
-                keep = (valid & self._in_workspace(world_pts) & (world_pts[:, 2] <= self.ceiling)
-                        & ~np.isin(frame.segmentation.ravel(), self._fixture_bodies))
-            cloud = _masked(frame.cloud, keep)
+            cloud = self._workspace_cloud(frame, world_pts, valid, self.ceiling)
             detections = tuple(self._recognizer.recognize(cloud, self.rng).detections)
             for det in detections:
                 if det.model in self.world.workpieces:
@@ -143,12 +137,25 @@ class Perception:
             raise InvalidInputError("look_at_held needs a Perception built with recognize=True")
         frame = self.camera.render(data, self.rng, KINECT_V1, rgb=False)
         T = frame.T_world_camera
-        world_pts = frame.cloud.points @ T[:3, :3].T + T[:3, 3]
-        with np.errstate(invalid="ignore"):
-            keep = (np.isfinite(world_pts[:, 2]) & self._in_workspace(world_pts)
-                    & ~np.isin(frame.segmentation.ravel(), np.concatenate([self._arm_bodies, self._fixture_bodies])))
-        cloud = _masked(frame.cloud, keep)
+        cloud = self._workspace_cloud(frame, *self._world_points(frame))
         return self._recognizer.refine(cloud, part, np.linalg.inv(T) @ T_world_part), T
+
+    def _world_points(self, frame: SensorFrame) -> tuple[np.ndarray, np.ndarray]:
+        """The frame's points in the world frame (N, 3; NaN rows stay NaN), and which are measured and
+        not the robot's own arm (N,)."""
+        T = frame.T_world_camera
+        pts = frame.cloud.points
+        own = np.isin(frame.segmentation.ravel(), self._arm_bodies)
+        return pts @ T[:3, :3].T + T[:3, 3], np.isfinite(pts[:, 2]) & ~own
+
+    def _workspace_cloud(self, frame: SensorFrame, world_pts: np.ndarray, valid: np.ndarray,
+                         ceiling: float = np.inf) -> PointCloud:
+        """PSORR's cloud: the ``valid`` points in the workspace up to ``ceiling`` (world z, m), less the
+        fixtures'. Cropped points become NaN, so the cloud stays organised."""
+        with np.errstate(invalid="ignore"):
+            keep = (valid & self._in_workspace(world_pts) & (world_pts[:, 2] <= ceiling)
+                    & ~np.isin(frame.segmentation.ravel(), self._fixture_bodies))
+        return _masked(frame.cloud, keep)
 
     def _in_workspace(self, world_pts: np.ndarray) -> np.ndarray:
         hx, hy = (v / 2 for v in self.world.config.table_size)
