@@ -100,13 +100,15 @@ def boxes_may_overlap(box_a: OrientedBox, box_b: OrientedBox) -> bool:
     return not bool(_sat_separated(t, Ra.T @ box_b.rotation, box_a.extent / 2, box_b.extent / 2))
 
 
-def overlap_candidates(centers_a, rotations_a, extents_a, centers_b, rotations_b, extents_b) -> np.ndarray:
+def overlap_candidates(centers_a, rotations_a, extents_a, centers_b, rotations_b, extents_b,
+                       mask: np.ndarray | None = None) -> np.ndarray:
     """(Na, Nb) bool: True where box i of A and box j of B may overlap.
 
     Centres (N, 3) m, rotations (N, 3, 3) with axes as columns, extents (N, 3)
     full side lengths in m (see boxes_to_arrays). Pairs whose bounding spheres
     are apart are rejected first; the rest get the same exact separating-axis
-    test as boxes_may_overlap, so the result equals it pair by pair.
+    test as boxes_may_overlap, so the result equals it pair by pair. Where an
+    (Na, Nb) bool ``mask`` is given, only its pairs are tested (the rest are False).
     """
     ca, Ra, ea = (np.asarray(x, float) for x in (centers_a, rotations_a, extents_a))
     cb, Rb, eb = (np.asarray(x, float) for x in (centers_b, rotations_b, extents_b))
@@ -115,17 +117,26 @@ def overlap_candidates(centers_a, rotations_a, extents_a, centers_b, rotations_b
         if c.shape != (n, 3) or R.shape != (n, 3, 3) or e.shape != (n, 3):
             raise InvalidInputError(f"set {name} needs centers (N, 3), rotations (N, 3, 3) and extents (N, 3); "
                                     f"got {c.shape}, {R.shape}, {e.shape}")
-    d = cb[None, :, :] - ca[:, None, :]  # (Na, Nb, 3)
+    if mask is not None and np.shape(mask) != (len(ca), len(cb)):
+        raise InvalidInputError(f"mask must be ({len(ca)}, {len(cb)}) bool, got shape {np.shape(mask)}")
     radius_a = np.linalg.norm(ea, axis=1) / 2
     radius_b = np.linalg.norm(eb, axis=1) / 2
-    result = np.linalg.norm(d, axis=2) <= radius_a[:, None] + radius_b[None, :] + _TOL
-    ia, ib = np.nonzero(result)
+    if mask is None:
+        d = cb[None, :, :] - ca[:, None, :]  # (Na, Nb, 3)
+        result = np.linalg.norm(d, axis=2) <= radius_a[:, None] + radius_b[None, :] + _TOL
+        ia, ib = np.nonzero(result)
+        d = d[ia, ib]
+    else:
+        ia, ib = np.nonzero(mask)
+        d = cb[ib] - ca[ia]
+        near = np.linalg.norm(d, axis=1) <= radius_a[ia] + radius_b[ib] + _TOL
+        ia, ib, d = ia[near], ib[near], d[near]
+        result = np.zeros((len(ca), len(cb)), dtype=bool)
     if len(ia):
         # SAT only on the pairs the sphere test kept: usually a small share.
         RaT = np.swapaxes(Ra[ia], 1, 2)
-        t = (RaT @ d[ia, ib][:, :, None])[:, :, 0]
-        R = RaT @ Rb[ib]
-        result[ia, ib] = ~_sat_separated(t, R, ea[ia] / 2, eb[ib] / 2)
+        t = (RaT @ d[:, :, None])[:, :, 0]
+        result[ia, ib] = ~_sat_separated(t, RaT @ Rb[ib], ea[ia] / 2, eb[ib] / 2)
     return result
 
 

@@ -5,20 +5,24 @@ scene; it scores by how much of them the boxes of agreeing scene primitives
 cover. Only primitives of the same kind and orientation count: a wall's box
 overlapping a floor's says nothing for the pose.
 
-All hypotheses of a scene are scored in one batch: every (hypothesis, model
-primitive, scene primitive) triple that survives the orientation test and the
-separating-axis test gets its exact box intersection (psorr.box_batch), with
-no Python loop over hypotheses or pairs.
+All hypotheses of a scene, of every model, are scored in one batch: every
+(hypothesis, model primitive, scene primitive) triple that survives the
+orientation test and then the separating-axis test gets its exact box
+intersection (psorr.box_batch), with no Python loop over hypotheses, models or
+pairs. A batch per model instead spent two thirds of the time in numpy's
+per-call overhead (Table 1's scenes: 0.24 against 0.09 ms a hypothesis).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Sequence
+from dataclasses import dataclass, fields
 
 import numpy as np
 
 from psorr.box_batch import intersection_ratios
 from psorr.box_overlap import boxes_to_arrays, overlap_candidates
+from psorr.errors import InvalidInputError
 from psorr.primitive_match import RADIUS_TOLERANCE
 from psorr.types import PrimitiveKind
 
@@ -50,9 +54,12 @@ class PrimitiveArrays:
                    weight=np.array([p.n_points for p in prims], dtype=float))
 
 
-def box_scores(model_prims: PrimitiveArrays, poses: np.ndarray, scene: PrimitiveArrays,
-               thickness: float) -> np.ndarray:
-    """(H,) scores in [0, 1] of H poses (H, 4, 4) T_cloud_model of one model.
+def box_scores(model_prims: PrimitiveArrays | Sequence[PrimitiveArrays], poses: np.ndarray, scene: PrimitiveArrays,
+               thickness: float, owners: np.ndarray | None = None) -> np.ndarray:
+    """(H,) scores in [0, 1] of H poses (H, 4, 4) T_cloud_model.
+
+    ``model_prims`` is one model's primitives, or a sequence of models' with ``owners`` (H,) int
+    naming each pose's model in it: a scene's hypotheses of all models are scored in one batch.
 
     A pose's score is the area-weighted mean, over the model primitives that face
     the sensor (cylinders always do), of the share of each primitive's box that the best
@@ -62,32 +69,48 @@ def box_scores(model_prims: PrimitiveArrays, poses: np.ndarray, scene: Primitive
     ``thickness`` metres (psorr.box_overlap.intersection_ratio), so that it reflects the
     in-plane overlap rather than sub-millimetre offsets along a face's normal.
     """
-    H, P, S = len(poses), len(model_prims.weight), len(scene.weight)
-    if H == 0 or P == 0 or S == 0:
+    models = [model_prims] if isinstance(model_prims, PrimitiveArrays) else list(model_prims)
+    H = len(poses)
+    owners = np.zeros(H, dtype=np.int64) if owners is None else np.asarray(owners, dtype=np.int64)
+    if owners.shape != (H,) or (H and not 0 <= owners.min() <= owners.max() < len(models)):
+        raise InvalidInputError(f"owners must be ({H},) indices into the {len(models)} models, got {owners!r}")
+    if H == 0 or len(scene.weight) == 0:
         return np.zeros(H)
-    R, t = poses[:, :3, :3], poses[:, :3, 3]
-    centers = np.einsum("hij,pj->hpi", R, model_prims.centers) + t[:, None, :]          # (H, P, 3)
-    rotations = np.einsum("hij,pjk->hpik", R, model_prims.rotations)                     # (H, P, 3, 3)
-    direction = np.einsum("hij,pj->hpi", R, model_prims.direction)                       # (H, P, 3)
+    lib, offsets = _concatenated(models)
+    # One row per (pose, primitive of its model).
+    counts = np.diff(offsets)[owners]
+    row_h = np.repeat(np.arange(H), counts)
+    row_p = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts) + offsets[owners][row_h]
+    if len(row_h) == 0:
+        return np.zeros(H)
+    R, t = poses[row_h, :3, :3], poses[row_h, :3, 3]
+    centers = np.einsum("nij,nj->ni", R, lib.centers[row_p]) + t                              # (N, 3)
+    direction = np.einsum("nij,nj->ni", R, lib.direction[row_p])                              # (N, 3)
+    plane = lib.is_plane[row_p]
     # A plane facing away from the sensor (at the origin) can match no scene box.
-    facing = ~model_prims.is_plane | (np.einsum("hpi,hpi->hp", direction, centers) < 0)
-    cos = np.einsum("hpi,si->hps", direction, scene.direction)
-    same_kind = model_prims.is_plane[:, None] == scene.is_plane[None, :]                 # (P, S)
-    radius_gap = np.abs(model_prims.radius[:, None] - scene.radius[None, :])
-    radius_ok = radius_gap < RADIUS_TOLERANCE * model_prims.radius[:, None]
-    agree = np.where(model_prims.is_plane[:, None], cos > _COS_AGREE, (np.abs(cos) > _COS_AGREE) & radius_ok)
-    agree &= same_kind & facing[:, :, None]
-    extents = np.broadcast_to(model_prims.extents, (H, P, 3))
-    near = overlap_candidates(centers.reshape(-1, 3), rotations.reshape(-1, 3, 3), extents.reshape(-1, 3),
-                              scene.centers, scene.rotations, scene.extents)
-    flat, s = np.nonzero(near & agree.reshape(H * P, S))
-    covered = np.zeros(H * P)
+    facing = ~plane | (np.einsum("ni,ni->n", direction, centers) < 0)
+    cos = direction @ scene.direction.T                                                       # (N, S)
+    radius_gap = np.abs(lib.radius[:, None] - scene.radius[None, :])
+    kind_ok = np.where(lib.is_plane[:, None], scene.is_plane[None, :],
+                       ~scene.is_plane[None, :] & (radius_gap < RADIUS_TOLERANCE * lib.radius[:, None]))  # (P, S)
+    agree = np.where(plane[:, None], cos > _COS_AGREE, np.abs(cos) > _COS_AGREE) & kind_ok[row_p] & facing[:, None]
+    # Only agreeing pairs get the overlap test, and only overlapping ones the exact intersection.
+    rotations, extents = R @ lib.rotations[row_p], lib.extents[row_p]
+    flat, s = np.nonzero(overlap_candidates(centers, rotations, extents, scene.centers, scene.rotations,
+                                            scene.extents, mask=agree))
+    covered = np.zeros(len(row_h))
     if len(flat):
-        ratios = intersection_ratios(centers.reshape(-1, 3)[flat], rotations.reshape(-1, 3, 3)[flat],
-                                     extents.reshape(-1, 3)[flat], scene.centers[s], scene.rotations[s],
-                                     scene.extents[s], thickness)
+        ratios = intersection_ratios(centers[flat], rotations[flat], extents[flat], scene.centers[s],
+                                     scene.rotations[s], scene.extents[s], thickness)
         np.maximum.at(covered, flat, ratios)
-    weights = facing * model_prims.weight                                                 # (H, P)
-    total = weights.sum(axis=1)
-    score = (covered.reshape(H, P) * weights).sum(axis=1) / np.where(total > 0, total, 1.0)
+    weights = facing * lib.weight[row_p]
+    total = np.bincount(row_h, weights, minlength=H)
+    score = np.bincount(row_h, covered * weights, minlength=H) / np.where(total > 0, total, 1.0)
     return np.where(total > 0, score, 0.0)
+
+
+def _concatenated(models: list[PrimitiveArrays]) -> tuple[PrimitiveArrays, np.ndarray]:
+    """The models' primitives as one PrimitiveArrays, and offsets (M + 1,): model m's are rows
+    offsets[m]:offsets[m + 1]."""
+    joined = {f.name: np.concatenate([getattr(m, f.name) for m in models]) for f in fields(PrimitiveArrays)}
+    return PrimitiveArrays(**joined), np.r_[0, np.cumsum([len(m.weight) for m in models])]

@@ -247,10 +247,7 @@ class Recognizer:
                 poses, models = densest_poses(poses, models, scene_index, self.model_centres, p.cluster_cell,
                                               p.max_hypotheses)
         t1 = time.perf_counter()
-        scores, scene = np.zeros(len(poses)), PrimitiveArrays.of(scene_prims)
-        for m in np.unique(models):
-            mine = models == m
-            scores[mine] = box_scores(self._model_prims[m], poses[mine], scene, p.box_thickness)
+        scores = box_scores(self._model_prims, poses, PrimitiveArrays.of(scene_prims), p.box_thickness, models)
         order = np.argsort(-scores, kind="stable")
         order = _share_out(order[scores[order] >= p.min_box_score], models, p.refine_top)
         verify_ms = (time.perf_counter() - t1) * 1e3

@@ -309,6 +309,10 @@ def test_vectorised_candidates_agree_with_scalar_sat():
     # SAT never rejects a pair with a positive intersection.
     volumes = np.array([[intersection_volume(a, b) for b in set_b] for a in set_a])
     assert not (volumes > 0)[~grid].any()
+    # A mask restricts the test to its pairs and leaves the rest False.
+    mask = rng.random(grid.shape) < 0.5
+    masked = overlap_candidates(*boxes_to_arrays(set_a), *boxes_to_arrays(set_b), mask=mask)
+    np.testing.assert_array_equal(masked, grid & mask)
 
 
 def test_overlap_candidates_shapes():
@@ -319,6 +323,8 @@ def test_overlap_candidates_shapes():
     assert overlap_candidates(*one, *one).tolist() == [[True]]
     with pytest.raises(InvalidInputError):
         overlap_candidates(np.zeros((2, 3)), np.zeros((1, 3, 3)), np.zeros((2, 3)), *one)
+    with pytest.raises(InvalidInputError, match="mask must be"):
+        overlap_candidates(*one, *one, mask=np.ones((2, 1), dtype=bool))
 
 
 # --- properties and speed ------------------------------------------------------------------------------------------

@@ -78,3 +78,36 @@ def test_no_poses_or_no_scene_primitives_score_nothing(library):
     model = PrimitiveArrays.of(library.model("bracket").graph.primitives)
     assert box_scores(model, np.zeros((0, 4, 4)), model, 0.04).shape == (0,)
     assert box_scores(model, np.eye(4)[None], PrimitiveArrays.of([]), 0.04).tolist() == [0.0]
+
+
+def test_one_batch_of_several_models_scores_as_each_model_alone(library):
+    catalog = load_catalog()
+    names = ["bracket", "bushing"]
+    scene = workpiece_scene(np.random.default_rng(5), {n: catalog[n].load_mesh() for n in names}, names)
+    decomposition = decompose(scene.cloud, DecomposeParams(voxel_size=0.008), np.random.default_rng(0))
+    scene_prims = PrimitiveArrays.of(p for p in decomposition.primitives if max(p.box.extent) < 0.3)
+    models = [PrimitiveArrays.of(library.model(n).graph.primitives) for n in names]
+    rng = np.random.default_rng(2)
+    poses, owners = [], []
+    for inst in scene.instances:
+        for owner in (0, 1):  # each model at both parts' poses, interleaved
+            for _ in range(6):
+                T = inst.T_camera_model.copy()
+                T[:3, :3] = Rotation.from_rotvec(rng.normal(0, 0.1, 3)).as_matrix() @ T[:3, :3]
+                T[:3, 3] += rng.normal(0, 0.005, 3)
+                poses.append(T)
+                owners.append(owner)
+    poses, owners = np.array(poses), np.array(owners)
+    together = box_scores(models, poses, scene_prims, 0.04, owners)
+    for m, model in enumerate(models):
+        np.testing.assert_allclose(together[owners == m], box_scores(model, poses[owners == m], scene_prims, 0.04),
+                                   atol=1e-12)
+    assert together.max() > 0.5
+
+
+def test_owners_must_index_the_models(library):
+    from psorr.errors import InvalidInputError
+
+    model = PrimitiveArrays.of(library.model("bracket").graph.primitives)
+    with pytest.raises(InvalidInputError, match="owners must be"):
+        box_scores([model], np.eye(4)[None], model, 0.04, np.array([1]))
