@@ -203,11 +203,12 @@ class Recognizer:
         if p.single_plane.enabled:
             # A part showing one face gives no pair; its face, matched by size, still gives a pose.
             # Only faces no detection explains are tried, so these few poses do not crowd out the pairs'.
-            t1 = time.perf_counter()
             faces = [prims[k] for k in np.flatnonzero(open_) if prims[k].kind is PrimitiveKind.PLANE]
             face_poses, face_models = self._single_plane.hypotheses(faces)
+            t1 = time.perf_counter()
             face_candidates = self._best_face_poses(view, face_poses, face_models)
-            ms = (time.perf_counter() - t1) * 1e3  # screening only, like the pairs' box time; not acceptance
+            # Screening only, like the pairs' box time: neither making the poses nor accepting them.
+            ms = (time.perf_counter() - t1) * 1e3
             more, tally.claimed = self._accept(view, face_candidates, tally.claimed)
             tally.add(more, len(face_poses), ms)
 
