@@ -73,7 +73,8 @@ def box_scores(model_prims: PrimitiveArrays | Sequence[PrimitiveArrays], poses: 
     H = len(poses)
     owners = np.zeros(H, dtype=np.int64) if owners is None else np.asarray(owners, dtype=np.int64)
     if owners.shape != (H,) or (H and not 0 <= owners.min() <= owners.max() < len(models)):
-        raise InvalidInputError(f"owners must be ({H},) indices into the {len(models)} models, got {owners!r}")
+        raise InvalidInputError(f"owners must be ({H},) indices into the {len(models)} models, got shape "
+                                f"{owners.shape}" + (f", values {owners.min()}..{owners.max()}" if owners.size else ""))
     if H == 0 or len(scene.weight) == 0:
         return np.zeros(H)
     lib, offsets = _concatenated(models)
