@@ -18,6 +18,8 @@ import open3d as o3d
 from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
+from psorr.open3d_threads import single_threaded
+
 DAMPING = 1e-2  # x the largest eigenvalue of the (scaled) normal equations, towards the start pose
 STOP_STEP = 1e-5  # m, and radians x the source's radius: a step smaller than this has converged
 RUNAWAY = 2.0  # x max_distance: an Open3D fit that moves the points further than this on average is redone
@@ -28,17 +30,11 @@ def register(source: np.ndarray, target: o3d.geometry.PointCloud, max_distance: 
     """The motion T (4, 4) that moves ``source`` (N, 3) onto ``target`` (points with normals): Open3D's
     point-to-plane ICP, or :func:`point_to_plane` where that one ran away."""
     cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(source))
-    # Open3D sums ICP's normal equations across threads in whatever order they finish, so the last
-    # bits of the pose, and everything a seeded episode does after it, would change from run to run.
-    threads = o3d.utility.get_max_threads()
-    o3d.utility.set_max_threads(1)
-    try:
+    with single_threaded():
         result = o3d.pipelines.registration.registration_icp(
             cloud, target, max_distance, np.eye(4),
             o3d.pipelines.registration.TransformationEstimationPointToPlane(),
             o3d.pipelines.registration.ICPConvergenceCriteria(max_iteration=iterations))
-    finally:
-        o3d.utility.set_max_threads(threads)
     T = np.asarray(result.transformation)
     moved = np.linalg.norm(source @ T[:3, :3].T + T[:3, 3] - source, axis=1).mean()
     if moved <= RUNAWAY * max_distance:

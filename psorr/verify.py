@@ -18,6 +18,7 @@ import open3d as o3d
 
 from psorr.icp import register
 from psorr.kinect_noise import KINECT_V1
+from psorr.open3d_threads import single_threaded
 from psorr.types import PointCloud
 
 KINECT_FOCAL = 525.0  # pixels of a 640-wide Kinect v1 image
@@ -122,7 +123,8 @@ class SceneView:
         keep = np.ones(len(down.points), dtype=bool)
         if len(down.points) >= 3:
             o3d.utility.random.seed(0)
-            plane, inliers = down.segment_plane(distance_threshold=0.008, ransac_n=3, num_iterations=200)
+            with single_threaded():
+                plane, inliers = down.segment_plane(distance_threshold=0.008, ransac_n=3, num_iterations=200)
             if len(inliers) > 0.2 * len(down.points):
                 plane = np.asarray(plane, float) / np.linalg.norm(plane[:3])
                 self.support_plane = plane if plane[3] > 0 else -plane  # origin on the positive side
