@@ -69,9 +69,10 @@ def _recognize(args) -> int:
     from psorr.library import library_from_arguments
     from psorr.recognize import Recognizer
 
+    # The scene first: a wrong path should not wait for a new library to train.
+    cloud = read_cloud(args.scene)
     library = library_from_arguments(args.models, units=args.units,
                                      progress=lambda xs: tqdm(xs, desc="training", file=sys.stderr))
-    cloud = read_cloud(args.scene)
     _log(f"read {args.scene}: {len(cloud)} points; models {', '.join(library.names)}")
     result = Recognizer(library, method=args.method).recognize(cloud, np.random.default_rng(args.seed))
     stats = result.stats

@@ -289,5 +289,6 @@ def library_from_arguments(items, units: str | None = None, progress=None) -> Mo
             meshes += found
         else:
             meshes.append(p)
-    print(f"training on {len(meshes)} meshes (cached in {cache_dir()})", file=sys.stderr)
+    print(f"training on {len(meshes)} mesh{'es' if len(meshes) != 1 else ''} (cached in {cache_dir()})",
+          file=sys.stderr)
     return ModelLibrary.from_meshes(meshes, units=units, progress=progress)

@@ -41,3 +41,12 @@ def test_bad_file_gives_one_line_error_not_a_traceback(tmp_path):
     assert "broken.pcd" in out.stderr and "Traceback" not in out.stderr
     missing = _run("decompose", str(tmp_path / "nowhere.ply"))
     assert missing.returncode == 2 and "nowhere.ply" in missing.stderr
+
+
+def test_recognize_reads_the_scene_before_it_trains_models(tmp_path):
+    # Training new meshes can take a while; a mistyped scene path should be reported at once.
+    mesh = tmp_path / "not_a_mesh.stl"
+    mesh.write_text("never read")
+    out = _run("recognize", str(mesh), str(tmp_path / "missing.pcd"), "--json")
+    assert out.returncode == 2 and out.stdout == ""
+    assert "missing.pcd" in out.stderr and "training" not in out.stderr and "not_a_mesh" not in out.stderr
