@@ -144,6 +144,16 @@ def summarize(results, episodes: int) -> dict:
     }
 
 
+def _at_least_one(text: str) -> int:
+    try:
+        n = int(text)
+    except ValueError:
+        n = 0
+    if n < 1:
+        raise argparse.ArgumentTypeError(f"expected a whole number of at least 1, got {text!r}")
+    return n
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="psorr-sim", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -156,7 +166,7 @@ def build_parser() -> argparse.ArgumentParser:
     per.set_defaults(run=_perceive)
     run = sub.add_parser("run", help="run seeded pick-and-place episodes of a task")
     run.add_argument("task", metavar="TASK.yaml", help="task file, e.g. tasks/demo.yaml")
-    run.add_argument("--episodes", type=int, default=1)
+    run.add_argument("--episodes", type=_at_least_one, default=1, help="how many seeded episodes (default 1)")
     run.add_argument("--seed", type=int, default=0)
     run.add_argument("--poses", choices=("recognized", "oracle"), default="recognized",
                      help="grasp from the recognizer's poses (default) or the true ones")

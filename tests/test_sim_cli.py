@@ -43,3 +43,11 @@ def test_bad_task_files_name_the_file_and_the_fix(tmp_path):
         out = subprocess.run([sys.executable, "-m", "sim.cli", "run", str(tmp_path / name)],
                              capture_output=True, text=True, timeout=120)
         assert out.returncode == 2 and name in out.stderr and "Traceback" not in out.stderr, out.stderr
+
+
+def test_run_wants_at_least_one_episode():
+    for count in ("0", "-2", "two"):
+        out = subprocess.run([sys.executable, "-m", "sim.cli", "run", "tasks/demo.yaml", "--episodes", count],
+                             capture_output=True, text=True, timeout=120)
+        assert out.returncode == 2 and "--episodes" in out.stderr and "at least 1" in out.stderr, out.stderr
+        assert "Traceback" not in out.stderr
