@@ -108,7 +108,7 @@ def build_parser() -> argparse.ArgumentParser:
     dec.add_argument("--json", action="store_true", help="print one JSON line instead of a table")
     dec.add_argument("--png", metavar="PICTURE.png", help="render the cloud coloured by primitive")
     dec.add_argument("--voxel-size", type=float, default=None, help="working resolution in metres (default 0.01)")
-    dec.add_argument("--seed", type=int, default=0, help="seed of the RANSAC sampling (default 0)")
+    dec.add_argument("--seed", type=seed, default=0, help="seed of the RANSAC sampling (default 0)")
     dec.set_defaults(run=_decompose)
     rec = sub.add_parser("recognize", help="find CAD-trained workpieces and their poses in a depth cloud")
     rec.add_argument("models", nargs="+", metavar="MODELS",
@@ -120,9 +120,29 @@ def build_parser() -> argparse.ArgumentParser:
                      help="units of the meshes (default m; meshes of implausible size are refused without it)")
     rec.add_argument("--json", action="store_true", help="print exactly one JSON line to stdout")
     rec.add_argument("--png", metavar="OVERLAY.png", help="draw the recognised models over the cloud")
-    rec.add_argument("--seed", type=int, default=0)
+    rec.add_argument("--seed", type=seed, default=0)
     rec.set_defaults(run=_recognize)
     return parser
+
+
+def _whole_number(text: str, least: int, what: str) -> int:
+    try:
+        n = int(text)
+    except ValueError:
+        n = least - 1
+    if n < least:
+        raise argparse.ArgumentTypeError(f"expected {what}, a whole number of at least {least}, got {text!r}")
+    return n
+
+
+def seed(text: str) -> int:
+    """An argparse type: a seed, which numpy's generators take only as a whole number >= 0."""
+    return _whole_number(text, 0, "a seed")
+
+
+def at_least_one(text: str) -> int:
+    """An argparse type: a count of at least 1."""
+    return _whole_number(text, 1, "a count")
 
 
 def run_parsed(parser: argparse.ArgumentParser, argv: list[str] | None) -> int:

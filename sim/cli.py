@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from psorr.cli import run_parsed
+from psorr.cli import at_least_one, run_parsed, seed
 
 
 def _log(message: str) -> None:
@@ -144,30 +144,20 @@ def summarize(results, episodes: int) -> dict:
     }
 
 
-def _at_least_one(text: str) -> int:
-    try:
-        n = int(text)
-    except ValueError:
-        n = 0
-    if n < 1:
-        raise argparse.ArgumentTypeError(f"expected a whole number of at least 1, got {text!r}")
-    return n
-
-
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="psorr-sim", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True)
     per = sub.add_parser("perceive", help="render the cell's Kinect cloud and recognise the parts in it")
-    per.add_argument("--seed", type=int, default=0, help="seed of the layout and the sensor noise")
+    per.add_argument("--seed", type=seed, default=0, help="seed of the layout and the sensor noise")
     per.add_argument("--parts", nargs="+", metavar="NAME", help="catalog parts to place (default: four)")
     per.add_argument("--out", metavar="DIR", help="write rgb.png and recognition.png here")
     per.add_argument("--json", action="store_true", help="print one JSON line instead of a table")
     per.set_defaults(run=_perceive)
     run = sub.add_parser("run", help="run seeded pick-and-place episodes of a task")
     run.add_argument("task", metavar="TASK.yaml", help="task file, e.g. tasks/demo.yaml")
-    run.add_argument("--episodes", type=_at_least_one, default=1, help="how many seeded episodes (default 1)")
-    run.add_argument("--seed", type=int, default=0)
+    run.add_argument("--episodes", type=at_least_one, default=1, help="how many seeded episodes (default 1)")
+    run.add_argument("--seed", type=seed, default=0)
     run.add_argument("--poses", choices=("recognized", "oracle"), default="recognized",
                      help="grasp from the recognizer's poses (default) or the true ones")
     run.add_argument("--occluder", choices=("on", "off"), default="on",

@@ -51,3 +51,13 @@ def test_run_wants_at_least_one_episode():
                              capture_output=True, text=True, timeout=120)
         assert out.returncode == 2 and "--episodes" in out.stderr and "at least 1" in out.stderr, out.stderr
         assert "Traceback" not in out.stderr
+
+
+def test_a_negative_seed_is_a_usage_error_in_every_command():
+    commands = [["sim.cli", "run", "tasks/demo.yaml"], ["sim.cli", "perceive"],
+                ["psorr.cli", "decompose", "scene.pcd"], ["psorr.cli", "recognize", "models", "scene.pcd"]]
+    for command in commands:
+        out = subprocess.run([sys.executable, "-m", *command, "--seed", "-1"], capture_output=True, text=True,
+                             timeout=120)
+        assert out.returncode == 2 and "--seed" in out.stderr and "at least 0" in out.stderr, out.stderr
+        assert "Traceback" not in out.stderr
