@@ -222,6 +222,17 @@ class PrimitiveShapeGraph:
         return sorted({j for i, j in self.edges if i == index} | {i for i, j in self.edges if j == index})
 
 
+def random_generator(rng, caller: str) -> np.random.Generator:
+    """``rng`` if it is a numpy Generator, a fresh ``default_rng(0)`` if it is None; anything else (a
+    seed, the legacy RandomState) is refused, naming ``caller`` and the fix."""
+    if rng is None:
+        return np.random.default_rng(0)
+    if not isinstance(rng, np.random.Generator):
+        raise InvalidInputError(f"{caller} takes rng=np.random.default_rng(seed), a numpy Generator; got "
+                                f"{type(rng).__name__} {rng!r:.40}")
+    return rng
+
+
 def _rigid_pose(value, name: str) -> np.ndarray:
     """``value`` as a read-only (4, 4) float array, checked to be a rigid transform."""
     pose = np.array(value, dtype=np.float64)

@@ -166,3 +166,10 @@ def test_bad_inputs_raise_clear_errors():
         DecomposeParams(voxel_size=0)
     with pytest.raises(InvalidInputError, match="cylinder_radius_range"):
         DecomposeParams(cylinder_radius_range=(0.2, 0.1))
+
+
+@pytest.mark.parametrize("bad", [5, np.random.RandomState(0)])
+def test_rng_must_be_a_generator_and_the_error_says_how_to_make_one(bad):
+    scene = synthetic.box_on_table(np.random.default_rng(0))
+    with pytest.raises(InvalidInputError, match=r"decompose\(\) takes rng=np.random.default_rng"):
+        decompose(scene.cloud, rng=bad)

@@ -221,6 +221,12 @@ def test_cli_prints_the_json_contract(tmp_path, library, catalog):
     assert (tmp_path / "overlay.png").exists()
 
 
+def test_recognize_wants_a_generator_not_a_seed(library):
+    scene = workpiece_scene(np.random.default_rng(9), {}, [])
+    with pytest.raises(InvalidInputError, match=r"recognize\(\) takes rng=np.random.default_rng"):
+        Recognizer(library).recognize(scene.cloud, 0)
+
+
 def test_the_same_cloud_gives_the_same_poses_to_the_last_bit(library, catalog):
     """A seed must reproduce an episode bit for bit, and everything after a pose depends on its last bits."""
     meshes = {n: catalog[n].load_mesh() for n in ("chassis", "transformer")}

@@ -19,7 +19,7 @@ from psorr.decomposition.preprocess import Voxelized, preprocess, undirected_edg
 from psorr.decomposition.psg import graph_edges
 from psorr.errors import InvalidInputError
 from psorr.kinect_noise import KINECT_V1
-from psorr.types import PointCloud, Primitive, PrimitiveKind, PrimitiveShapeGraph
+from psorr.types import PointCloud, Primitive, PrimitiveKind, PrimitiveShapeGraph, random_generator
 
 
 @dataclass(frozen=True)
@@ -124,7 +124,7 @@ def decompose(cloud: PointCloud, params: DecomposeParams | None = None,
     if not isinstance(cloud, PointCloud):
         raise InvalidInputError(f"decompose() takes a psorr.PointCloud, got {type(cloud).__name__}")
     params = params or DecomposeParams()
-    rng = rng if rng is not None else np.random.default_rng(0)
+    rng = random_generator(rng, "decompose()")
     clock = [time.perf_counter()]
 
     def lap():
