@@ -146,6 +146,20 @@ class Recognizer:
         return refine_icp(view, model.points, model.normals, T, self.params.icp_distance, iterations=15,
                           max_points=1000)
 
+    def _coarse_fit(self, view, model, T):
+        """The coarse ICP of a candidate, and its coarse point check. A part that slides almost onto
+        itself (a channel) is also fitted from where the data place it along its length, and the better
+        fit is kept: a slide judged from a tilted start went 2-5 cm the wrong way, from starts the plain
+        fit took to within 0.6 mm."""
+        starts = [T]
+        slid = self._resolvers[model.name].slide_onto_surface(view, T, _COARSE)
+        if not np.array_equal(slid, T):
+            starts.append(slid)
+        fits = [self._coarse_icp(view, model, S) for S in starts]
+        checks = [check_pose(view, model.points, model.normals, F, _COARSE) for F in fits]
+        best = max(range(len(fits)), key=lambda k: checks[k].score)
+        return fits[best], checks[best]
+
     def _fine_icp(self, view, model, T):
         p = self.params
         return refine_icp(view, model.points, model.normals, T, p.icp_distance / 3, max_points=p.icp_points)
@@ -283,13 +297,10 @@ class Recognizer:
         scored = []
         for model_index, T in candidates:
             model = self.library.models[model_index]
-            # A part that slides almost onto itself (a channel) is placed along its length by the data first.
-            T = self._resolvers[model.name].slide_onto_surface(view, T, _COARSE)
-            T = self._coarse_icp(view, model, T)
+            T, coarse = self._coarse_fit(view, model, T)
             # Most candidates are wrong, and one coarse ICP shows it: too little of the model is measured
             # (of its surface, and of what nearer ones leave in view), or the sensor sees through too much
             # of it. The fine pass is kept for the rest.
-            coarse = check_pose(view, model.points, model.normals, T, _COARSE)
             hopeless = (coarse.visible_fraction < p.min_visible_fraction / 2
                         and coarse.unblocked_fraction < p.min_unblocked_fraction / 2)
             if hopeless or coarse.violation_ratio > max_violation:
