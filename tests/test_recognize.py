@@ -140,7 +140,7 @@ def test_partly_hidden_parts_of_the_occluded_benchmark_scenes_are_found(library,
     # - the chassis of seed 2 shows 0.18 of its sensor-facing surface, and most of the rest lies in the arm's
     #   projector shadow: unmeasured, it counted against the part until shadows counted as hidden;
     # - the U-channel of seed 3, two thirds hidden, got pair poses 4 cm off along its length, where neither
-    #   ICP nor the resolver's slide reaches: candidates of a sliding part are now slid onto the data first;
+    #   ICP nor the resolver's slide reaches: candidates of a sliding part are now also fitted slid onto the data;
     # - the pipe tee of seed 4 shows its run but not its branch, and Open3D's ICP rolled it away.
     for seed, name in ((2, "chassis"), (3, "u_channel"), (4, "pipe_tee")):
         scene = _occluded_clutter(catalog, seed)
