@@ -30,6 +30,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from psorr.depth_compare import DepthRenderer, residual_costs
+from psorr.rotations import turn
 from psorr.types import PrimitiveKind
 from psorr.verify import CheckParams, PoseCheck, SceneView, check_pose, refine_icp
 
@@ -131,7 +132,7 @@ def near_continuous_axis(model, renderer: DepthRenderer,
     for point, axis in candidates:
         means, largest = [], 0.0
         for a in AXIS_TEST_DEGREES:  # most candidates fail the first turn or two
-            distance = renderer.distance((subset - point) @ _turn(axis, np.radians(a)).T + point)
+            distance = renderer.distance((subset - point) @ turn(axis, np.radians(a)).T + point)
             means.append(distance.mean())
             largest = max(largest, float(distance.max()))
             if means[-1] >= limit * model.diameter:
@@ -174,12 +175,6 @@ def _exact_but_features(points: np.ndarray, turns: np.ndarray) -> np.ndarray:
 # A model's near-symmetries (turns, which of them are exact but for features, axis, slide direction), by
 # model object: Models are immutable.
 _FOUND: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-
-
-def _turn(axis: np.ndarray, angle: float) -> np.ndarray:
-    """(3, 3) rotation by ``angle`` radians about the unit ``axis``."""
-    K = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
-    return np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K
 
 
 class NearSymmetryResolver:
@@ -230,7 +225,7 @@ class NearSymmetryResolver:
         poses = np.repeat(T[None], len(degrees), axis=0)
         for k, a in enumerate(degrees):
             S = np.eye(4)
-            S[:3, :3] = _turn(axis, np.radians(a))
+            S[:3, :3] = turn(axis, np.radians(a))
             S[:3, 3] = point - S[:3, :3] @ point
             poses[k] = T @ S
         return poses

@@ -16,9 +16,9 @@ from __future__ import annotations
 import numpy as np
 import open3d as o3d
 from scipy.spatial import cKDTree
-from scipy.spatial.transform import Rotation
 
 from psorr.open3d_threads import single_threaded
+from psorr.rotations import from_rotation_vector, rotation_vector
 
 DAMPING = 1e-2  # x the largest eigenvalue of the (scaled) normal equations, towards the start pose
 STOP_STEP = 1e-5  # m, and radians x the source's radius: a step smaller than this has converged
@@ -64,11 +64,11 @@ def point_to_plane(source: np.ndarray, target: np.ndarray, target_normals: np.nd
         r = np.einsum("ij,ij->i", p - q, n)
         H = J.T @ J
         # The prior holds the start: what the planes do not constrain stays where the start put it.
-        so_far = np.concatenate([Rotation.from_matrix(R).as_rotvec() * scale, R @ centre + t - centre])
+        so_far = np.concatenate([rotation_vector(R) * scale, R @ centre + t - centre])
         damping = DAMPING * np.linalg.eigvalsh(H)[-1]
         step = np.linalg.solve(H + damping * np.eye(6), -J.T @ r - damping * so_far)
         turn, slide = step[:3] / scale, step[3:]
-        dR = Rotation.from_rotvec(turn).as_matrix()
+        dR = from_rotation_vector(turn)
         # The step turns about the centre: p' = dR p + slide, in coordinates about it.
         R, t = dR @ R, dR @ (t - centre) + centre + slide
         if np.linalg.norm(slide) < STOP_STEP and np.linalg.norm(turn) * scale < STOP_STEP:
