@@ -223,7 +223,7 @@ def pick_and_place(world: World, part: str, T_world_part_estimate: np.ndarray,
         pe, yaw, tilt = fixture_error(T_final, world.T_world_fixtures[part], info)
         xy = float(np.linalg.norm(T_final[:2, 3] - world.T_world_fixtures[part][:2, 3])) * 1e3
         rests = abs(T_final[2, 3] - world.table_top) * 1e3 <= REST_TOL_MM and tilt <= PLACE_TOL_DEG
-        placed = pe <= PLACE_TOL_MM and yaw <= PLACE_TOL_DEG and rests
+        placed = bool(pe <= PLACE_TOL_MM and yaw <= PLACE_TOL_DEG and rests)  # not numpy.bool_: JSON wrote 0.0
         note = (f"placed: {pe:.1f} mm (xy {xy:.1f}), yaw {yaw:.1f} deg, tilt {tilt:.1f} deg, "
                 f"z {1e3 * (T_final[2, 3] - world.table_top):+.1f} mm over the table")
         return result(g.name, True, lifted, placed, pe, yaw, grip + (note if placed else "not seated: " + note[8:]))
