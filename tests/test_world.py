@@ -72,7 +72,29 @@ def test_parts_rest_on_the_table_and_stay(world):
         assert T[2, 2] > math.cos(math.radians(1.0)), name  # upright
         assert np.all(np.abs(T[:2, 3]) < np.asarray(CONFIG.table_size) / 2)
         assert np.linalg.norm(world.body_pose(name, data)[:3, 3] - T[:3, 3]) < 5e-4, name  # at rest
+        # Asleep, so they cost no contacts until the gripper wakes them (the episodes' grasps show it does).
+        assert data.tree_awake[world.model.body_treeid[world.model.body(name).id]] == 0, name
     assert warnings_of(data) == {}
+
+
+def test_the_part_in_the_gripper_is_kept_awake(world):
+    # Asleep, a part stays where it is when its support goes: one held still against a pad hung in the
+    # air once the gripper opened. The held part never sleeps; let go, it sleeps again once at rest.
+    from sim.cell import ArmCell
+
+    cell = ArmCell(world)
+    world.reset(cell.data)
+    held, *others = world.workpieces
+    trees = {n: world.model.body_treeid[world.model.body(n).id] for n in world.workpieces}
+    cell.holding = held
+    cell.step(100)
+    assert cell.data.tree_awake[trees[held]] == 1
+    assert all(cell.data.tree_awake[trees[n]] == 0 for n in others)
+    cell.holding = None
+    cell.step(100)
+    assert cell.data.tree_awake[trees[held]] == 0
+    assert not cell.data.xfrc_applied.any()
+    world.reset(cell.data)
 
 
 def test_fixtures_hold_their_part_and_reject_a_misplaced_one(world):
