@@ -51,6 +51,10 @@ _REBUILD = "build them with: .venv/bin/python assets/workpieces/build_collision.
 class World:
     """A built cell. Poses are (4, 4) read-only arrays in the world frame (metres).
 
+    Parts at rest sleep (MuJoCo's sleeping; see ``_scene``), and writing a sleeping part's ``qpos``
+    does not move it: to place parts by hand, write their ``qpos`` right after :meth:`reset`, when
+    every body is awake, or clear ``mujoco.mjtEnableBit.mjENBL_SLEEP`` in ``model.opt.enableflags``.
+
     Attributes:
         config: what was built.
         spec: the MjSpec it was compiled from (edit and ``spec.compile()`` for variants).
