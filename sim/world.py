@@ -157,11 +157,11 @@ def _add_boxes(spec, body, name: str, boxes, material: str) -> None:
 def _scene(spec: mujoco.MjSpec, cfg: WorldConfig) -> None:
     """Options, defaults, materials, floor, light, table and camera."""
     apply_arm_options(spec)
-    # Parts at rest sleep (MuJoCo >= 3.4) until an awake body touches them: resting on the table as
-    # about 30 convex pieces, they made 120 contacts, and stepping cost 9x what it does asleep. "At
-    # rest" is under 0.1 mm/s, a tenth of MuJoCo's default, so that a part sliding slowly down a
-    # fixture wall is not taken for one at rest; parts still sleep within 0.1 s of coming to rest.
-    # sim.cell keeps the part in the gripper awake.
+    # Parts at rest sleep until an awake body touches them (MuJoCo >= 3.15; 3.4-3.14 take the flag but
+    # never put these parts to sleep). Resting on the table as about 30 convex pieces each, they made
+    # 120 contacts, and stepping cost 9x what it does asleep. "At rest" is under 0.1 mm/s, a tenth of
+    # MuJoCo's default, so that a part sliding slowly down a fixture wall is not taken for one at rest;
+    # parts still sleep within 0.1 s of coming to rest. sim.cell keeps the part in the gripper awake.
     spec.option.enableflags |= mujoco.mjtEnableBit.mjENBL_SLEEP
     spec.option.sleep_tolerance = 1e-4
     spec.modelname = "psorr_cell"
