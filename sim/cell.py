@@ -31,10 +31,7 @@ HUMAN_EVERY = 10  # physics steps between updates of the person's mocap poses (2
 MONITOR_S = 0.25  # s of simulated time between workspace checks while the arm moves
 LOOK_PAN = math.pi / 2  # rad the shoulder pans from home to take the arm out of the camera's view
 MAX_STOP_S = 30.0  # s a protective stop may last before the episode gives up on the move
-# N: a force with no physical effect that keeps the held part awake. MuJoCo lets a body that is
-# (nearly) still sleep, and nothing wakes it when its support goes: a chassis at rest against one
-# pad fell asleep as the gripper eased off, and hung in the air after the release (5 of 50 episodes).
-# A tree with a nonzero applied force never sleeps.
+# N: a force with no physical effect that keeps a part awake (see ArmCell.keep_awake).
 KEEP_AWAKE_N = 1e-200
 
 
@@ -71,8 +68,7 @@ class ArmCell:
         recorder: gets :meth:`Recorder.tick` after every physics step, or None.
 
     Attributes:
-        holding: the part the gripper is believed to hold (None when open); the monitor ignores it, and
-            MuJoCo does not put it to sleep.
+        holding: the part the gripper is believed to hold (None when open); the monitor ignores it.
         protective_stops, stopped_s: how often and how long the monitor held the arm.
         min_human_clearance: least distance (m) seen between the arm's geoms and the human's.
     """
@@ -93,7 +89,8 @@ class ArmCell:
         self.table = ["table_collision"]
         self.human, self.monitor, self.recorder = human, monitor, recorder
         self._human_poses = None
-        self._holding: str | None = None
+        self.holding: str | None = None
+        self._kept_awake: str | None = None
         self.steps = 0
         self.protective_stops, self.stopped_s = 0, 0.0
         self.min_human_clearance = math.inf
@@ -107,17 +104,19 @@ class ArmCell:
             self._move_human()
             mujoco.mj_forward(m, self.data)
 
-    @property
-    def holding(self) -> str | None:
-        return self._holding
+    def keep_awake(self, part: str | None) -> None:
+        """Keep ``part`` from sleeping until the next call (None: let the one kept so far sleep again).
 
-    @holding.setter
-    def holding(self, part: str | None) -> None:
-        if self._holding is not None:
-            self.data.xfrc_applied[self.model.body(self._holding).id] = 0.0
+        MuJoCo lets a (nearly) still body sleep, and nothing wakes it when its support goes: a chassis
+        at rest against one pad fell asleep as the gripper eased off, and hung in the air after the
+        release (5 of 50 episodes). A tree with a nonzero applied force never sleeps, so the part gets
+        a force of no physical effect, :data:`KEEP_AWAKE_N`.
+        """
+        if self._kept_awake is not None:
+            self.data.xfrc_applied[self.model.body(self._kept_awake).id] = 0.0
         if part is not None:
             self.data.xfrc_applied[self.model.body(part).id, 2] = KEEP_AWAKE_N
-        self._holding = part
+        self._kept_awake = part
 
     # -------------------------------------------------------------------------------- stepping
 

@@ -162,6 +162,7 @@ def pick_and_place(world: World, part: str, T_world_part_estimate: np.ndarray,
             cell.follow(cell.path(q, T, shift(T, [0, 0, LIFT])), 0.8)
         except (UnreachableTargetError, WorkspaceBlockedError):
             pass
+        cell.keep_awake(None)
         return result(g.name, False, lifted, note=why)
 
     def execute() -> PickResult:
@@ -175,6 +176,8 @@ def pick_and_place(world: World, part: str, T_world_part_estimate: np.ndarray,
         cell.gripper_to(world.arm.gripper_closed, 0.4, ramp_s=0.6)  # squeeze gently: a snap shoves the part
         touching = cell.pads_touch(body)
         cell.holding = part
+        # Awake until the gripper has let go and backed off: asleep against a pad, it would stay there.
+        cell.keep_awake(part)
         if cell.recorder is not None:
             cell.recorder.grasped(world, world.data, part)
         # Lift straight up.
@@ -219,6 +222,7 @@ def pick_and_place(world: World, part: str, T_world_part_estimate: np.ndarray,
         cell.holding = None
         cell.follow(cell.path(qs[-1], T_release, T_above), 0.8)
         cell.gripper_to(world.arm.gripper_open, 0.3)  # the part has settled ~1.4 s since release
+        cell.keep_awake(None)
         T_final = world.body_pose(part)
         pe, yaw, tilt = fixture_error(T_final, world.T_world_fixtures[part], info)
         xy = float(np.linalg.norm(T_final[:2, 3] - world.T_world_fixtures[part][:2, 3])) * 1e3

@@ -161,7 +161,7 @@ def _scene(spec: mujoco.MjSpec, cfg: WorldConfig) -> None:
     # never put these parts to sleep). Resting on the table as about 30 convex pieces each, they made
     # 120 contacts, and stepping cost 9x what it does asleep. "At rest" is under 0.1 mm/s, a tenth of
     # MuJoCo's default, so that a part sliding slowly down a fixture wall is not taken for one at rest;
-    # parts still sleep within 0.1 s of coming to rest. sim.cell keeps the part in the gripper awake.
+    # parts still sleep within 0.1 s of coming to rest. sim.pick keeps the part it handles awake.
     spec.option.enableflags |= mujoco.mjtEnableBit.mjENBL_SLEEP
     spec.option.sleep_tolerance = 1e-4
     spec.modelname = "psorr_cell"

@@ -77,20 +77,20 @@ def test_parts_rest_on_the_table_and_stay(world):
     assert warnings_of(data) == {}
 
 
-def test_the_part_in_the_gripper_is_kept_awake(world):
+def test_a_part_kept_awake_does_not_sleep(world):
     # Asleep, a part stays where it is when its support goes: one held still against a pad hung in the
-    # air once the gripper opened. The held part never sleeps; let go, it sleeps again once at rest.
+    # air once the gripper opened. The part a pick handles is kept awake; let go, it sleeps again.
     from sim.cell import ArmCell
 
     cell = ArmCell(world)
     world.reset(cell.data)
     held, *others = world.workpieces
     trees = {n: world.model.body_treeid[world.model.body(n).id] for n in world.workpieces}
-    cell.holding = held
+    cell.keep_awake(held)
     cell.step(100)
     assert cell.data.tree_awake[trees[held]] == 1
     assert all(cell.data.tree_awake[trees[n]] == 0 for n in others)
-    cell.holding = None
+    cell.keep_awake(None)
     cell.step(100)
     assert cell.data.tree_awake[trees[held]] == 0
     assert not cell.data.xfrc_applied.any()
