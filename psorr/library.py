@@ -285,10 +285,20 @@ def library_from_arguments(items, units: str | None = None, progress=None) -> Mo
         if p.is_dir():
             found = sorted(f for f in p.iterdir() if f.suffix.lower() in MESH_SUFFIXES)
             if not found:
-                raise CloudFileError(p, f"the folder holds no {'/'.join(MESH_SUFFIXES)} meshes", "point at the meshes")
+                raise CloudFileError(p, f"the folder holds no {'/'.join(MESH_SUFFIXES)} meshes", _mesh_folder_hint(p))
             meshes += found
         else:
             meshes.append(p)
     print(f"training on {len(meshes)} mesh{'es' if len(meshes) != 1 else ''} (cached in {cache_dir()})",
           file=sys.stderr)
     return ModelLibrary.from_meshes(meshes, units=units, progress=progress)
+
+
+def _mesh_folder_hint(folder: Path) -> str:
+    """What to pass instead of a folder without meshes: its subfolders that hold some, if any."""
+    nested = sorted(d for d in folder.iterdir()
+                    if d.is_dir() and any(f.suffix.lower() in MESH_SUFFIXES for f in d.iterdir()))
+    if nested:
+        return "the meshes are one level down: pass " + " or ".join(str(d) for d in nested[:3])
+    return "pass a folder of meshes, or the mesh files themselves"
+

@@ -75,6 +75,17 @@ def test_not_a_library_is_a_clear_error(tmp_path):
         ModelLibrary.load(bad)
 
 
+def test_a_folder_without_meshes_names_the_subfolder_that_has_them(tmp_path):
+    from psorr.library import library_from_arguments
+    (tmp_path / "meshes").mkdir()
+    trimesh.creation.box(extents=(0.1, 0.06, 0.04)).export(tmp_path / "meshes" / "block.stl")
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(CloudFileError, match="no .* meshes .*one level down: pass .*meshes"):
+        library_from_arguments([tmp_path])
+    with pytest.raises(CloudFileError, match="empty: .*pass a folder of meshes"):
+        library_from_arguments([tmp_path / "empty"])
+
+
 def test_bad_settings_name_the_field():
     from psorr.library import TrainParams
     from psorr.recognize import RecognizeParams
