@@ -38,7 +38,7 @@ from tqdm import tqdm
 
 from psorr import ModelLibrary, Recognizer
 from psorr.recognize import RecognizeParams
-from psorr.workpieces import load_catalog, symmetric_add
+from psorr.workpieces import load_catalog, symmetric_add, symmetry_transforms
 
 ROOT = Path(__file__).resolve().parents[1]
 OBJECTS = ("chassis", "transformer", "circuit_board")
@@ -48,21 +48,9 @@ ADD_THRESHOLD = 0.1  # x model diameter
 # ---------------------------------------------------------------- scoring
 
 
-def _symmetry_rotations(info) -> np.ndarray:
-    """(K, 3, 3) rotations of the part's symmetries, with spins about a continuous axis if it has one."""
-    rots = info.symmetries[:, :3, :3]
-    if info.continuous_axis is not None:
-        a = info.continuous_axis
-        k = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
-        ang = np.deg2rad(np.arange(0.0, 360.0, 1.0))
-        spins = np.eye(3) + np.sin(ang)[:, None, None] * k + (1 - np.cos(ang))[:, None, None] * (k @ k)
-        rots = np.einsum("kij,mjl->kmil", rots, spins).reshape(-1, 3, 3)
-    return rots
-
-
 def rotation_error_deg(T_est, T_true, info) -> float:
     """Degrees between the estimated and true rotation, minimised over the part's symmetries."""
-    rel = np.einsum("ji,kjl->kil", T_est[:3, :3], T_true[:3, :3] @ _symmetry_rotations(info))
+    rel = np.einsum("ji,kjl->kil", T_est[:3, :3], T_true[:3, :3] @ symmetry_transforms(info, 1.0)[:, :3, :3])
     cos = (np.trace(rel, axis1=1, axis2=2) - 1) / 2
     return float(np.degrees(np.arccos(np.clip(cos, -1, 1))).min())
 

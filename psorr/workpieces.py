@@ -215,13 +215,13 @@ def _axis_rotations(axis: np.ndarray, step_deg: float) -> np.ndarray:
     return out
 
 
-def symmetry_transforms(info: WorkpieceInfo) -> np.ndarray:
+def symmetry_transforms(info: WorkpieceInfo, step_deg: float = CONTINUOUS_STEP_DEG) -> np.ndarray:
     """(K, 4, 4) model-frame transforms that map the part onto itself: its discrete
     symmetries, each composed with rotations about its continuous axis (if it has one)
-    every CONTINUOUS_STEP_DEG degrees."""
+    every ``step_deg`` degrees."""
     if info.continuous_axis is None:
         return np.asarray(info.symmetries)
-    spins = _axis_rotations(info.continuous_axis, CONTINUOUS_STEP_DEG)
+    spins = _axis_rotations(info.continuous_axis, step_deg)
     return np.einsum("kij,mjl->kmil", info.symmetries, spins).reshape(-1, 4, 4)
 
 
