@@ -11,6 +11,7 @@ import trimesh
 from scipy.spatial import cKDTree
 
 from psorr.errors import InvalidInputError
+from psorr.open3d_threads import limited_threads
 from psorr.types import PointCloud
 
 # ---------------------------------------------------------------- shared steps
@@ -28,16 +29,15 @@ def threads(n: int | None, cv2=None):
     if n is None:
         yield
         return
-    before = o3d.utility.get_max_threads(), cv2.getNumThreads() if cv2 else None
-    o3d.utility.set_max_threads(n)
+    before = cv2.getNumThreads() if cv2 else None
     if cv2:
         cv2.setNumThreads(n)
     try:
-        yield
+        with limited_threads(n):
+            yield
     finally:
-        o3d.utility.set_max_threads(before[0])
         if cv2:
-            cv2.setNumThreads(before[1])
+            cv2.setNumThreads(before)
 
 
 def o3d_cloud(points: np.ndarray, normals: np.ndarray | None = None) -> o3d.geometry.PointCloud:

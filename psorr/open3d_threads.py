@@ -16,11 +16,16 @@ import open3d as o3d
 
 
 @contextmanager
-def single_threaded() -> Iterator[None]:
-    """Run the body with Open3D limited to one thread; the previous limit is restored after."""
-    threads = o3d.utility.get_max_threads()
-    o3d.utility.set_max_threads(1)
+def limited_threads(n: int) -> Iterator[None]:
+    """Run the body with Open3D limited to ``n`` >= 1 threads; the previous limit is restored after."""
+    before = o3d.utility.get_max_threads()
+    o3d.utility.set_max_threads(n)
     try:
         yield
     finally:
-        o3d.utility.set_max_threads(threads)
+        o3d.utility.set_max_threads(before)
+
+
+def single_threaded():
+    """Run the body with Open3D limited to one thread (a context manager): seeds repeat exactly."""
+    return limited_threads(1)
