@@ -18,13 +18,14 @@ how each is screened:
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.spatial import cKDTree
 
 from psorr.ambiguity import NearSymmetryResolver
 from psorr.box_score import PrimitiveArrays, box_scores
+from psorr.claims import PixelClaims
 from psorr.decomposition import decompose
 from psorr.decomposition.detail import decompose_leftovers
 from psorr.errors import InvalidInputError
@@ -80,13 +81,15 @@ class _Tally:
     """What one recognize() call has found so far, and its cost."""
 
     decomposition_ms: float = 0.0
-    detections: list = field(default_factory=list)
-    claimed: np.ndarray | None = None  # 4x4-pixel blocks the detections explain
+    claims: PixelClaims | None = None  # the detections, and the 4x4-pixel blocks they explain
     hypotheses: int = 0
     verify_ms: float = 0.0
 
-    def add(self, detections, hypotheses: int, verify_ms: float) -> None:
-        self.detections += detections
+    @property
+    def detections(self) -> list[Detection]:
+        return self.claims.detections if self.claims is not None else []
+
+    def add(self, hypotheses: int, verify_ms: float) -> None:
         self.hypotheses += hypotheses
         self.verify_ms += verify_ms
 
@@ -209,8 +212,8 @@ class Recognizer:
             # explained, their primitives leave the pairing and a part with few votes gets its turn.
             keep = np.flatnonzero(open_)
             candidates, n, ms = self._pair_candidates(pts[keep], nrm[keep], [prims[k] for k in keep])
-            more, tally.claimed = self._accept(view, candidates, tally.claimed)
-            tally.add(more, n, ms)
+            more, tally.claims = self._accept(view, candidates, tally.claims)
+            tally.add(n, ms)
             open_ &= [not self._on_detected_surface(more, m) for m in members]
             if not more or open_.sum() < 2:
                 break
@@ -223,8 +226,8 @@ class Recognizer:
             face_candidates = self._best_face_poses(view, face_poses, face_models)
             # Screening only, like the pairs' box time: neither making the poses nor accepting them.
             ms = (time.perf_counter() - t1) * 1e3
-            more, tally.claimed = self._accept(view, face_candidates, tally.claimed)
-            tally.add(more, len(face_poses), ms)
+            _, tally.claims = self._accept(view, face_candidates, tally.claims)
+            tally.add(len(face_poses), ms)
 
     def _floats(self, view, model, T_cloud_model) -> bool:
         """Is the model's lowest point more than max_float above the supporting plane? Parts rest on the
@@ -286,9 +289,10 @@ class Recognizer:
         order = _share_out(order[scores[order] >= sp.min_score], models, sp.top)
         return [(models[k], poses[k]) for k in order]
 
-    def _accept(self, view, candidates, claimed: np.ndarray | None = None) -> tuple[list[Detection], np.ndarray]:
-        """Detections among ``candidates`` (model index, pose), and the 4x4-pixel blocks claimed so far
-        (``claimed``: by earlier detections, which a new one may share only up to max_shared_pixels)."""
+    def _accept(self, view, candidates, claims: PixelClaims | None = None) -> tuple[list[Detection], PixelClaims]:
+        """The new detections among ``candidates`` (model index, pose), and ``claims`` with them added: the
+        detections so far and the pixels they explain. A candidate that shares more than max_shared_pixels of
+        its pixels with earlier detections is dropped, unless it scores higher, when it displaces them."""
         p = self.params
         # PSORR's candidates that end up accepted are seen through by at most 0.17 after the coarse
         # pass (22 benchmark scenes), so twice the acceptance bar drops about half the rest. ORR's
@@ -313,16 +317,17 @@ class Recognizer:
                     and not self._floats(view, model, T)):
                 scored.append((check.score, model, T, check))
         scored.sort(key=lambda s: -s[0])
-        if claimed is None:
-            claimed = np.zeros(view.n_blocks, dtype=bool)
+        if claims is None:
+            claims = PixelClaims(view.n_blocks, p.max_shared_pixels)
         detections = []
-        for _, model, T, check in scored:
-            blocks = check.supported_blocks
-            if claimed[blocks].mean() > p.max_shared_pixels:
+        for score, model, T, check in scored:
+            displaced = claims.rivals(check.supported_blocks, score)
+            if displaced is None:
                 continue
-            claimed[blocks] = True
             # Only now, on the few survivors, is a dense check affordable: it tells a part from its
             # near-symmetric twin pose (a tray turned end for end) by the small features.
-            detections.append(self._resolved(view, model, T))
-        return detections, claimed
+            detection = self._resolved(view, model, T)
+            claims.add(detection, check.supported_blocks, score, displaced)
+            detections.append(detection)
+        return detections, claims
 

@@ -1,0 +1,47 @@
+"""psorr.claims: which detection keeps pixels that two explain."""
+
+import numpy as np
+
+from psorr.claims import PixelClaims
+from psorr.types import Detection
+
+
+def _detection(name: str, score: float) -> Detection:
+    return Detection(name, np.eye(4), score)
+
+
+def test_a_candidate_on_free_pixels_displaces_no_one():
+    claims = PixelClaims(100, max_shared=0.3)
+    claims.add(_detection("hub", 0.8), np.arange(0, 20), 0.8, [])
+    # 2 of its 10 blocks are held: within the share two neighbours may have in common.
+    assert claims.rivals(np.arange(18, 28), 0.1) == []
+
+
+def test_a_worse_candidate_on_held_pixels_is_dropped():
+    claims = PixelClaims(100, max_shared=0.3)
+    claims.add(_detection("board", 0.8), np.arange(0, 20), 0.8, [])
+    assert claims.rivals(np.arange(5, 15), 0.5) is None
+    assert claims.rivals(np.arange(5, 15), 0.8) is None  # a tie keeps the one found first
+
+
+def test_a_better_candidate_displaces_the_detection_found_first():
+    claims = PixelClaims(100, max_shared=0.3)
+    bracket, hub = _detection("bracket", 0.48), _detection("hub", 0.7)
+    claims.add(bracket, np.arange(0, 20), 0.48, [])
+    claims.add(hub, np.arange(40, 60), 0.7, [])
+    board = _detection("board", 0.81)
+    displaced = claims.rivals(np.arange(0, 15), 0.81)
+    assert displaced == [0]
+    claims.add(board, np.arange(0, 15), 0.81, displaced)
+    assert claims.detections == [hub, board]
+    # The bracket's blocks the board does not explain are free again; the board's are its own.
+    assert claims.rivals(np.arange(15, 20), 0.01) == []
+    assert claims.rivals(np.arange(0, 15), 0.5) is None
+
+
+def test_only_as_many_rivals_as_needed_are_displaced():
+    claims = PixelClaims(100, max_shared=0.3)
+    claims.add(_detection("a", 0.5), np.arange(0, 8), 0.5, [])
+    claims.add(_detection("b", 0.9), np.arange(8, 10), 0.9, [])
+    # 10 blocks: 8 held by a, 2 by b. Displacing a leaves 0.2 held, so b (who outscores it) stays.
+    assert claims.rivals(np.arange(0, 10), 0.6) == [0]
