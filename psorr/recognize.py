@@ -214,7 +214,7 @@ class Recognizer:
             candidates, n, ms = self._pair_candidates(pts[keep], nrm[keep], [prims[k] for k in keep])
             more, tally.claims = self._accept(view, candidates, tally.claims)
             tally.add(n, ms)
-            open_ &= [not self._on_detected_surface(more, m) for m in members]
+            open_ &= np.array([not self._on_detected_surface(more, m) for m in members], dtype=bool)
             if not more or open_.sum() < 2:
                 break
         if p.single_plane.enabled:
