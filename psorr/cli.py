@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from psorr.errors import PsorrError
+from psorr.types import require_sensor_metres
 
 
 def _log(message: str) -> None:
@@ -21,6 +22,7 @@ def _decompose(args) -> int:
     from psorr.io import read_cloud
 
     cloud = read_cloud(args.cloud)
+    require_sensor_metres(cloud, str(args.cloud))
     _log(f"read {args.cloud}: {len(cloud)} points, {int(cloud.valid_mask.sum())} finite")
     params = DecomposeParams(voxel_size=args.voxel_size) if args.voxel_size else DecomposeParams()
     result = decompose(cloud, params, np.random.default_rng(args.seed))
@@ -71,6 +73,7 @@ def _recognize(args) -> int:
 
     # The scene first: a wrong path should not wait for a new library to train.
     cloud = read_cloud(args.scene)
+    require_sensor_metres(cloud, str(args.scene))
     library = library_from_arguments(args.models, units=args.units,
                                      progress=lambda xs: tqdm(xs, desc="training", file=sys.stderr))
     _log(f"read {args.scene}: {len(cloud)} points; models {', '.join(library.names)}")

@@ -36,7 +36,7 @@ from psorr.primitive_match import PrimitiveSizes
 from psorr.recognize_params import METHODS, Recognition, RecognitionStats, RecognizeParams
 from psorr.single_plane import SinglePlaneMatcher
 from psorr.support_crop import crop_to_parts
-from psorr.types import Detection, PointCloud, PrimitiveKind, random_generator
+from psorr.types import Detection, PointCloud, PrimitiveKind, random_generator, require_sensor_metres
 from psorr.unexplained import blanked, on_detected_surface, part_sized, standing_points, standing_unexplained
 from psorr.verify import CheckParams, SceneView, check_pose, refine_icp
 
@@ -114,6 +114,7 @@ class Recognizer:
     def recognize(self, cloud: PointCloud, rng: np.random.Generator | None = None) -> Recognition:
         if not isinstance(cloud, PointCloud):
             raise InvalidInputError(f"recognize() takes a psorr.PointCloud, got {type(cloud).__name__}")
+        require_sensor_metres(cloud, "recognize(): the cloud")
         rng = random_generator(rng, "recognize()")
         start = time.perf_counter()
         view = SceneView(cloud)

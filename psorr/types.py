@@ -233,6 +233,25 @@ def random_generator(rng, caller: str) -> np.random.Generator:
     return rng
 
 
+SENSOR_RANGE_LIMIT = 25.0  # m: beyond any Kinect-class sensor's reach (about 10 m)
+
+
+def require_sensor_metres(cloud: PointCloud, what: str) -> None:
+    """Refuse a cloud that is evidently not in metres about the sensor: the median distance of its
+    (every 97th valid) points from the origin beyond SENSOR_RANGE_LIMIT, as a Kinect cloud in
+    millimetres (about 800) is. ``what`` names the cloud in the message (a file, or "the cloud")."""
+    sample = cloud.points[::97]
+    sample = sample[np.isfinite(sample).all(axis=1)]
+    if len(sample) == 0:
+        return
+    median = float(np.median(np.linalg.norm(sample, axis=1)))
+    if median > SENSOR_RANGE_LIMIT:
+        raise InvalidInputError(
+            f"{what}: its points lie a median {median:.4g} units from the sensor, beyond any depth sensor's "
+            f"{SENSOR_RANGE_LIMIT:.0f} m; psorr takes clouds in metres in the sensor's frame (a cloud in "
+            "millimetres: scale it by 0.001; one in a world frame: move it into the camera's)")
+
+
 def _rigid_pose(value, name: str) -> np.ndarray:
     """``value`` as a read-only (4, 4) float array, checked to be a rigid transform."""
     pose = np.array(value, dtype=np.float64)

@@ -8,6 +8,7 @@ import numpy as np
 
 from psorr import synthetic
 from psorr.io import write_cloud
+from psorr.types import PointCloud
 
 
 def _run(*args):
@@ -50,3 +51,14 @@ def test_recognize_reads_the_scene_before_it_trains_models(tmp_path):
     out = _run("recognize", str(mesh), str(tmp_path / "missing.pcd"), "--json")
     assert out.returncode == 2 and out.stdout == ""
     assert "missing.pcd" in out.stderr and "training" not in out.stderr and "not_a_mesh" not in out.stderr
+
+
+def test_a_cloud_in_millimetres_is_refused_with_the_fix(tmp_path):
+    scene = synthetic.box_on_table(np.random.default_rng(0))
+    path = tmp_path / "scene_mm.ply"
+    write_cloud(path, PointCloud(scene.cloud.points * 1000.0))
+    for args in (("decompose", str(path)), ("recognize", str(tmp_path / "no_meshes_needed.stl"), str(path))):
+        out = _run(*args)
+        assert out.returncode == 2 and "Traceback" not in out.stderr
+        assert "scene_mm.ply" in out.stderr and "millimetres: scale it by 0.001" in out.stderr
+        assert "training" not in out.stderr  # refused before any model is trained

@@ -162,6 +162,9 @@ def test_bad_inputs_raise_clear_errors():
         decompose(np.zeros((10, 3)))
     with pytest.raises(InvalidInputError, match="finite points"):
         decompose(PointCloud(np.full((50, 3), np.nan)))
+    millimetres = PointCloud(synthetic.box_on_table(np.random.default_rng(0)).cloud.points * 1000.0)
+    with pytest.raises(InvalidInputError, match=r"decompose\(\): the cloud: .* millimetres: scale it by 0.001"):
+        decompose(millimetres)
     with pytest.raises(InvalidInputError, match="voxel_size"):
         DecomposeParams(voxel_size=0)
     with pytest.raises(InvalidInputError, match="cylinder_radius_range"):

@@ -19,6 +19,7 @@ from psorr.io import write_cloud
 from psorr.library import ModelLibrary
 from psorr.recognize import RecognizeParams, Recognizer
 from psorr.scenes import workpiece_scene
+from psorr.types import PointCloud
 from psorr.verify import SceneView
 from psorr.workpieces import DEFAULT_CATALOG, load_catalog, symmetric_add
 
@@ -205,6 +206,12 @@ def test_empty_table_gives_no_detection(library, catalog, method):
     for seed in (0, 9):
         scene = workpiece_scene(np.random.default_rng(seed), {}, [])
         assert Recognizer(library, method).recognize(scene.cloud, np.random.default_rng(0)).detections == ()
+
+
+def test_a_cloud_in_millimetres_is_refused(library):
+    scene = workpiece_scene(np.random.default_rng(0), {}, [])
+    with pytest.raises(InvalidInputError, match=r"recognize\(\): the cloud: .* in metres"):
+        Recognizer(library).recognize(PointCloud(scene.cloud.points * 1000.0))
 
 
 def test_unknown_method_names_the_choices(library):

@@ -19,7 +19,14 @@ from psorr.decomposition.preprocess import Voxelized, preprocess, undirected_edg
 from psorr.decomposition.psg import graph_edges
 from psorr.errors import InvalidInputError
 from psorr.kinect_noise import KINECT_V1
-from psorr.types import PointCloud, Primitive, PrimitiveKind, PrimitiveShapeGraph, random_generator
+from psorr.types import (
+    PointCloud,
+    Primitive,
+    PrimitiveKind,
+    PrimitiveShapeGraph,
+    random_generator,
+    require_sensor_metres,
+)
 
 
 @dataclass(frozen=True)
@@ -123,6 +130,7 @@ def decompose(cloud: PointCloud, params: DecomposeParams | None = None,
     """
     if not isinstance(cloud, PointCloud):
         raise InvalidInputError(f"decompose() takes a psorr.PointCloud, got {type(cloud).__name__}")
+    require_sensor_metres(cloud, "decompose(): the cloud")
     params = params or DecomposeParams()
     rng = random_generator(rng, "decompose()")
     clock = [time.perf_counter()]
