@@ -180,6 +180,9 @@ class Recognizer:
         # table larger than any model, so it still is not paired as a part's face.
         margin = _TABLE_EXTENT / 2 * self.max_diameter
         cropped = crop_to_parts(cloud, view.support_plane, margin, p.support_crop)
+        if cropped.valid_mask.sum() <= p.decompose.k_neighbours:
+            # A handful of points, most of them table: too few to decompose, and nothing to find (as ORR says).
+            return [], 0, 0.0, (time.perf_counter() - t0) * 1e3
         scene = decompose(cropped, p.decompose, rng)
         if p.leftover_voxel is not None:
             scene = decompose_leftovers(cropped, scene, p.leftover_voxel, p.decompose, rng)

@@ -208,6 +208,13 @@ def test_empty_table_gives_no_detection(library, catalog, method):
         assert Recognizer(library, method).recognize(scene.cloud, np.random.default_rng(0)).detections == ()
 
 
+@pytest.mark.parametrize("method", ["psorr", "orr"])
+def test_a_handful_of_points_gives_no_detection(library, method):
+    # PSORR cropped all but 4 of these as table and then refused to decompose "a cloud of 4 points".
+    points = np.random.default_rng(0).uniform(-0.1, 0.1, (10, 3)) + [0, 0, 1]
+    assert Recognizer(library, method).recognize(PointCloud(points), np.random.default_rng(0)).detections == ()
+
+
 def test_a_cloud_in_millimetres_is_refused(library):
     scene = workpiece_scene(np.random.default_rng(0), {}, [])
     with pytest.raises(InvalidInputError, match=r"recognize\(\): the cloud: .* in metres"):
