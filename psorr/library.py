@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 import trimesh
+from scipy.spatial import ConvexHull, QhullError
 
 from psorr.decomposition import DecomposeParams, decompose
 from psorr.errors import CloudFileError, InvalidInputError
@@ -101,10 +102,18 @@ def train_model(name: str, mesh: trimesh.Trimesh, params: TrainParams, sha: str 
     points, faces = trimesh.sample.sample_surface(mesh, count, seed=int(rng.integers(2**31)))
     normals = mesh.face_normals[faces]
     result = decompose(PointCloud(points, normals=normals), params.decompose, rng)
-    hull = trimesh.convex.convex_hull(points[::max(1, len(points) // 4000)])
-    diameter = float(np.max(np.linalg.norm(hull.vertices[:, None] - hull.vertices[None], axis=2)))
+    diameter = _diameter(points[::max(1, len(points) // 4000)])
     return Model(name, np.asarray(points), np.asarray(normals), result.graph, diameter, sha,
                  np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces, dtype=np.int64))
+
+
+def _diameter(points: np.ndarray) -> float:
+    """The largest distance between two of ``points`` (N, 3), found among their convex hull's corners."""
+    try:
+        corners = points[ConvexHull(points).vertices]
+    except QhullError:  # a flat part (one sheet): joggled, the hull still names its extreme points
+        corners = points[ConvexHull(points, qhull_options="QJ").vertices]
+    return float(np.max(np.linalg.norm(corners[:, None] - corners[None], axis=2)))
 
 
 def spread_samples(points: np.ndarray, count: int, rng) -> np.ndarray:

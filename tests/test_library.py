@@ -86,6 +86,15 @@ def test_a_folder_without_meshes_names_the_subfolder_that_has_them(tmp_path):
         library_from_arguments([tmp_path / "empty"])
 
 
+def test_a_flat_mesh_trains(tmp_path, monkeypatch):
+    # Its convex hull has no volume: trimesh's hull then wanted networkx, which we do not install.
+    monkeypatch.setenv("PSORR_CACHE", str(tmp_path / "cache"))
+    sheet = trimesh.Trimesh([[0, 0, 0], [0.1, 0, 0], [0, 0.1, 0]], [[0, 1, 2]])
+    sheet.export(tmp_path / "sheet.stl")
+    model = ModelLibrary.from_meshes([tmp_path / "sheet.stl"]).models[0]
+    assert 0.12 < model.diameter <= np.sqrt(2) * 0.1 + 1e-9
+
+
 def test_bad_settings_name_the_field():
     from psorr.library import TrainParams
     from psorr.recognize import RecognizeParams
