@@ -163,6 +163,9 @@ def read_mesh(path) -> trimesh.Trimesh:
     if len(mesh.faces) == 0:
         raise CloudFileError(path, "the mesh has no faces",
                              "export the surface, not just its vertices")
+    if not mesh.area > 0:  # every triangle degenerate: nothing to sample a surface from
+        raise CloudFileError(path, f"the mesh's {len(mesh.faces)} faces have no area",
+                             "export the surface; its triangles are collapsed to lines or points")
     return mesh
 
 

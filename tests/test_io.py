@@ -492,6 +492,9 @@ def test_read_mesh_errors(tmp_path):
     _expect_mesh_error(tmp_path / "lines.obj", "lines.obj")
     (tmp_path / "junk.stl").write_bytes(b"\x00" * 90)
     _expect_mesh_error(tmp_path / "junk.stl", "junk.stl")
+    # Triangles collapsed to a line would train a "model" with no surface.
+    (tmp_path / "collapsed.obj").write_text("v 0 0 0\nv 0.1 0 0\nv 0.2 0 0\nf 1 2 3\n")
+    _expect_mesh_error(tmp_path / "collapsed.obj", "collapsed.obj", "no area")
 
 
 def test_writing_labels_to_a_format_without_them_warns(tmp_path):
