@@ -80,3 +80,17 @@ def densest_poses(poses: np.ndarray, models: np.ndarray, voters: np.ndarray, cen
         chosen.append(np.array(picked, dtype=np.int64))
     best = np.concatenate(chosen)
     return poses[best], models[best]
+
+
+def share_out(order, models, limit):
+    """Up to `limit` of the ranked hypotheses, taken round-robin across models
+    so that one model's many near-duplicates cannot fill every slot."""
+    queues = {}
+    for k in order:
+        queues.setdefault(int(models[k]), []).append(k)
+    chosen = []
+    while len(chosen) < limit and any(queues.values()):
+        for queue in queues.values():
+            if queue and len(chosen) < limit:
+                chosen.append(queue.pop(0))
+    return chosen

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from psorr.errors import InvalidInputError
+from psorr.types import PrimitiveKind
 
 
 def _angle(u: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -160,3 +161,21 @@ class PairTable:
         frames_model = pair_frames(self.points[a], self.normals[a], self.points[b])
         frames_scene = pair_frames(p1[scene_index], n1[scene_index], p2[scene_index])
         return frames_scene @ invert_rigid(frames_model), self.model[a]
+
+
+def scene_oriented_points(primitives, max_extent: float) -> tuple[np.ndarray, np.ndarray, list[int]]:
+    """PSORR's oriented scene points: plane centroids with normals and cylinder axes (the axis point
+    nearest the centroid), as (K, 3) points and (K, 3) directions, and the indices of the K primitives
+    they come from. A primitive whose box is longer than ``max_extent`` metres (the table) is skipped."""
+    pts, nrm, used = [], [], []
+    for index, p in enumerate(primitives):
+        if max(p.box.extent) > max_extent:
+            continue
+        if p.kind is PrimitiveKind.PLANE:
+            pts.append(p.centroid)
+            nrm.append(p.normal)
+        else:
+            pts.append(p.axis_point + ((p.centroid - p.axis_point) @ p.axis) * p.axis)
+            nrm.append(p.axis)
+        used.append(index)
+    return np.array(pts).reshape(-1, 3), np.array(nrm).reshape(-1, 3), used

@@ -31,7 +31,8 @@ from psorr.decomposition.detail import decompose_leftovers
 from psorr.errors import InvalidInputError
 from psorr.library import ModelLibrary
 from psorr.orr import orr_hypotheses
-from psorr.pose_clusters import densest_poses
+from psorr.pose_clusters import densest_poses, share_out
+from psorr.ppf import scene_oriented_points
 from psorr.primitive_match import PrimitiveSizes
 from psorr.recognize_params import METHODS, Recognition, RecognitionStats, RecognizeParams
 from psorr.single_plane import SinglePlaneMatcher
@@ -40,40 +41,8 @@ from psorr.types import Detection, PointCloud, PrimitiveKind, random_generator, 
 from psorr.unexplained import blanked, on_detected_surface, part_sized, standing_points, standing_unexplained
 from psorr.verify import CheckParams, SceneView, check_pose, refine_icp
 
-
-def _scene_oriented_points(primitives, max_extent):
-    """Plane centroids with normals and cylinder axes (the point nearest the centroid) of
-    object-sized primitives; a primitive larger than every model (the table) is skipped."""
-    pts, nrm, used = [], [], []
-    for index, p in enumerate(primitives):
-        if max(p.box.extent) > max_extent:
-            continue
-        if p.kind is PrimitiveKind.PLANE:
-            pts.append(p.centroid)
-            nrm.append(p.normal)
-        else:
-            pts.append(p.axis_point + ((p.centroid - p.axis_point) @ p.axis) * p.axis)
-            nrm.append(p.axis)
-        used.append(index)
-    return np.array(pts).reshape(-1, 3), np.array(nrm).reshape(-1, 3), used
-
-
 _COARSE = CheckParams(max_points=300)
 _TABLE_EXTENT = 1.2  # in diameters of the largest model: a primitive larger than this is the table
-
-
-def _share_out(order, models, limit):
-    """Up to `limit` of the ranked hypotheses, taken round-robin across models
-    so that one model's many near-duplicates cannot fill every slot."""
-    queues = {}
-    for k in order:
-        queues.setdefault(int(models[k]), []).append(k)
-    chosen = []
-    while len(chosen) < limit and any(queues.values()):
-        for queue in queues.values():
-            if queue and len(chosen) < limit:
-                chosen.append(queue.pop(0))
-    return chosen
 
 
 @dataclass
@@ -206,7 +175,7 @@ class Recognizer:
         """Pair rounds, then single faces, over the primitives of the decomposition ``scene``; what
         they find, and what it cost, is added to ``tally``."""
         p = self.params
-        pts, nrm, used = _scene_oriented_points(scene.primitives, _TABLE_EXTENT * self.max_diameter)
+        pts, nrm, used = scene_oriented_points(scene.primitives, _TABLE_EXTENT * self.max_diameter)
         prims = [scene.primitives[k] for k in used]
         members = [cloud.points[scene.labels == k] for k in used]
         # Primitives no detection explains yet; those an earlier search's detections explain are out.
@@ -271,7 +240,7 @@ class Recognizer:
         t1 = time.perf_counter()
         scores = box_scores(self._model_prims, poses, PrimitiveArrays.of(scene_prims), p.box_thickness, models)
         order = np.argsort(-scores, kind="stable")
-        order = _share_out(order[scores[order] >= p.min_box_score], models, p.refine_top)
+        order = share_out(order[scores[order] >= p.min_box_score], models, p.refine_top)
         verify_ms = (time.perf_counter() - t1) * 1e3
         return [(models[k], poses[k]) for k in order], len(poses), verify_ms
 
@@ -290,7 +259,7 @@ class Recognizer:
         scores = np.array([check_pose(view, self.library.models[m].points, self.library.models[m].normals, T,
                                       sp.check).score for T, m in zip(poses, models)])
         order = np.argsort(-scores, kind="stable")
-        order = _share_out(order[scores[order] >= sp.min_score], models, sp.top)
+        order = share_out(order[scores[order] >= sp.min_score], models, sp.top)
         return [(models[k], poses[k]) for k in order]
 
     def _accept(self, view, candidates, claims: PixelClaims | None = None) -> tuple[list[Detection], PixelClaims]:

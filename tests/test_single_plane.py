@@ -5,7 +5,8 @@ import pytest
 
 from psorr.decomposition import decompose
 from psorr.library import ModelLibrary
-from psorr.recognize import RecognizeParams, Recognizer, _scene_oriented_points
+from psorr.ppf import scene_oriented_points
+from psorr.recognize import RecognizeParams, Recognizer
 from psorr.scenes import workpiece_scene
 from psorr.single_plane import SinglePlaneMatcher, in_plane_sides, plane_frames
 from psorr.types import PrimitiveKind
@@ -46,7 +47,7 @@ def test_a_face_seen_whole_gives_the_pose(parts, part, seed):
     scene = workpiece_scene(np.random.default_rng(seed), meshes, [part])
     params = RecognizeParams()
     prims = decompose(scene.cloud, params.decompose, np.random.default_rng(0)).primitives
-    _, _, used = _scene_oriented_points(prims, 1.2 * max(m.diameter for m in library.models))
+    _, _, used = scene_oriented_points(prims, 1.2 * max(m.diameter for m in library.models))
     poses, owners = SinglePlaneMatcher(library.models).hypotheses([prims[k] for k in used])
     model = library.model(part)
     truth = scene.instances[0].T_camera_model
