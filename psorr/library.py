@@ -208,6 +208,11 @@ class ModelLibrary:
         paths = [Path(p) for p in paths]
         if not paths:
             raise InvalidInputError(f"no mesh files given; pass {', '.join(MESH_SUFFIXES)} files or a folder of them")
+        for k, path in enumerate(paths):
+            twin = next((q for q in paths[:k] if q.stem == path.stem), None)
+            if twin is not None:  # found before training them
+                raise InvalidInputError(f"{twin} and {path} would both be the model {path.stem!r} (a model is named "
+                                        "by its file stem): pass each mesh once, or rename one of two different ones")
         start = time.perf_counter()
         models = []
         for path in (progress(paths) if progress else paths):

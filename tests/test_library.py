@@ -6,7 +6,7 @@ import trimesh
 from scipy.spatial.transform import Rotation
 
 from psorr import library as library_module
-from psorr.errors import CloudFileError
+from psorr.errors import CloudFileError, InvalidInputError
 from psorr.library import ModelLibrary, load_mesh_in_metres
 from psorr.ppf import HashParams, PairTable, invert_rigid, pair_frames
 from psorr.workpieces import DEFAULT_CATALOG
@@ -93,6 +93,18 @@ def test_a_flat_mesh_trains(tmp_path, monkeypatch):
     sheet.export(tmp_path / "sheet.stl")
     model = ModelLibrary.from_meshes([tmp_path / "sheet.stl"]).models[0]
     assert 0.12 < model.diameter <= np.sqrt(2) * 0.1 + 1e-9
+
+
+def test_two_meshes_with_one_name_are_refused_before_training(tmp_path, monkeypatch):
+    trained = []
+    monkeypatch.setattr(library_module, "train_model", lambda *a, **k: trained.append(a))
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    for folder in ("a", "b"):
+        trimesh.creation.box(extents=(0.1, 0.06, 0.04)).export(tmp_path / folder / "block.stl")
+    with pytest.raises(InvalidInputError, match=r"a/block.stl and .*b/block.stl would both be the model 'block'"):
+        ModelLibrary.from_meshes([tmp_path / "a" / "block.stl", tmp_path / "b" / "block.stl"], use_cache=False)
+    assert trained == []
 
 
 def test_bad_settings_name_the_field():
