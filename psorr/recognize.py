@@ -94,7 +94,8 @@ class Recognizer:
             detections, _ = self._accept(view, candidates)
             decomposition_ms = 0.0
         total = (time.perf_counter() - start) * 1e3
-        stats = RecognitionStats(self.method, n_hyp, verify_ms / max(n_hyp, 1), decomposition_ms, total,
+        # No hypothesis, no verification to report: the cost of screening none is no cost per hypothesis.
+        stats = RecognitionStats(self.method, n_hyp, verify_ms / n_hyp if n_hyp else 0.0, decomposition_ms, total,
                                  self.library.train_ms)
         return Recognition(tuple(detections), stats)
 
