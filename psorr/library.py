@@ -315,4 +315,3 @@ def _mesh_folder_hint(folder: Path) -> str:
     if nested:
         return "the meshes are one level down: pass " + " or ".join(str(d) for d in nested[:3])
     return "pass a folder of meshes, or the mesh files themselves"
-
