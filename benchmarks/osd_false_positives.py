@@ -1,10 +1,11 @@
-"""False detections on real Kinect clouds that hold none of our parts, PSORR and ORR, on one core.
+"""False detections on real Kinect clouds that hold none of our parts, PSORR and ORR, on one core;
+each also with the continuation check on (RecognizeParams.max_continued, psorr.continuation).
 
 The OSD learn set's 45 clouds show boxes, stacked boxes, occluded objects and cylinders on a table.
 None is a catalog part, so every detection of the 8 catalog parts there is false. Prints, per method,
 the detections per scene group and per model and the scenes with any, and writes the list.
 
-    python benchmarks/osd_false_positives.py [--osd DIR] [--methods psorr,orr] [--out benchmarks/results]
+    python benchmarks/osd_false_positives.py [--osd DIR] [--methods psorr,orr] [--max-continued 0.2] [--out DIR]
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from tqdm import tqdm
 from psorr.io import read_cloud
 from psorr.library import ModelLibrary
 from psorr.recognize import Recognizer
+from psorr.recognize_params import RecognizeParams
 from psorr.workpieces import load_catalog
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -39,6 +41,8 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--osd", type=Path, default=DEFAULT_OSD, help="folder of learn*.pcd")
     parser.add_argument("--methods", default="psorr,orr")
+    parser.add_argument("--max-continued", type=float, default=0.2,
+                        help="each method also runs with RecognizeParams.max_continued set to this (0: not)")
     parser.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "results")
     args = parser.parse_args(argv)
     paths = sorted(args.osd.glob("learn*.pcd"), key=lambda p: int(p.stem[5:]))
@@ -48,12 +52,16 @@ def main(argv=None) -> int:
     catalog = load_catalog()
     library = ModelLibrary.from_meshes([catalog[n].mesh_path for n in sorted(catalog)])
     records = {}
-    for method in args.methods.split(","):
-        recognizer = Recognizer(library, method)
-        records[method] = []
-        for path in tqdm(paths, desc=method, file=sys.stderr):
+    settings = [(m, RecognizeParams()) for m in args.methods.split(",")]
+    if args.max_continued:
+        settings += [(m, RecognizeParams(max_continued=args.max_continued)) for m in args.methods.split(",")]
+    for method, params in settings:
+        label = method if params.max_continued is None else f"{method}, max_continued {params.max_continued}"
+        recognizer = Recognizer(library, method, params)
+        records[label] = []
+        for path in tqdm(paths, desc=label, file=sys.stderr):
             result = recognizer.recognize(read_cloud(path), np.random.default_rng(0))
-            records[method].append({"scene": path.stem, "group": _group(int(path.stem[5:])),
+            records[label].append({"scene": path.stem, "group": _group(int(path.stem[5:])),
                                     "detections": [{"model": d.model, "score": round(d.score, 3)}
                                                    for d in result.detections]})
     lines = [f"{len(paths)} OSD learn clouds (none holds a catalog part), all 8 catalog parts as candidates; "

@@ -115,5 +115,8 @@ def test_bad_settings_name_the_field():
         RecognizeParams(refine_top=0)
     with pytest.raises(Exception, match="min_visible_fraction"):
         RecognizeParams(min_visible_fraction=1.5)
+    with pytest.raises(Exception, match="max_continued must lie in"):
+        RecognizeParams(max_continued=2.0)
+    assert RecognizeParams(max_continued=None).max_continued is None  # the check can be turned off
     with pytest.raises(Exception, match="TrainParams"):
         TrainParams(sample_spacing=0)
