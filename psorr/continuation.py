@@ -6,8 +6,8 @@ box's corner, a chassis on a box's top (the OSD learn set's boxes took 43 such d
 clouds). What tells them apart lies just outside the model: there the box's faces go on, in the
 planes of the model's faces, where a real bracket's outline would show the table or a gap.
 
-The check looks at a ring of pixels around the pose's silhouette (its visible points, gaps between
-samples closed) and asks, for each measured ring pixel off the supporting plane, whether it lies
+The check looks at a ring of pixels around the pose's silhouette (every posed model point, gaps
+between samples closed) and asks, for each measured ring pixel off the supporting plane, whether it lies
 on the tangent plane of the nearest visible model point. The supporting plane is left out: a part
 lying flat on the table continues the table's plane by design.
 """
@@ -47,7 +47,7 @@ def continued_share(view: SceneView, model_points: np.ndarray, model_normals: np
     # The outline is the whole model's, not only of what shows: a coil that hides the core behind it
     # leaves holes in the visible points' pixels, and the core seen through them would count as going on.
     every_u, every_v, inside = view.project(pts)
-    u, v, _ = view.project(pts[visible])
+    u, v = every_u[visible], every_v[visible]
     z = float(np.median(pts[visible, 2]))
     reach = max(1, int(round(params.ring * view.focal / z)))
     # Work in a window around the silhouette: the whole buffer would cost more than the check itself.
@@ -62,7 +62,7 @@ def continued_share(view: SceneView, model_points: np.ndarray, model_normals: np
     covered = np.zeros(shape, dtype=bool)
     in_window = inside & (every_u >= u0) & (every_u < u1) & (every_v >= v0) & (every_v < v1)
     covered[every_v[in_window] - v0, every_u[in_window] - u0] = True
-    silhouette = binary_closing(covered | sampled, iterations=2)
+    silhouette = binary_closing(covered, iterations=2)  # the visible points are among them
     ring = binary_dilation(silhouette, iterations=reach) & ~silhouette
     rv, ru = np.nonzero(ring)
     depth = view.depth[(rv + v0) * view.width + (ru + u0)]
