@@ -35,6 +35,27 @@ def test_a_small_block_flush_with_a_large_blocks_side_is_continued_and_alone_is_
         assert share_on_large > threshold and share_alone < threshold / 4, (seed, share_on_large, share_alone)
 
 
+def test_an_l_bracket_in_the_corner_of_a_block_and_the_table_is_continued_past_its_leg():
+    """The OSD clouds' commonest false detection: the bracket's inside fitted to a box's face and the table
+    in front of it. Past the leg the nearest model points are on its 5 mm top edge, across the box face
+    that goes on above; the nearest one alone gave these layouts 0.09-0.11."""
+    from psorr.workpieces import load_catalog
+
+    bracket = load_catalog()["bracket"].load_mesh()
+    points, faces = trimesh.sample.sample_surface(bracket, 8000, seed=0)
+    points, normals = np.asarray(points), bracket.face_normals[faces]
+    block = _block(0.20, 0.16, 0.12)
+    # The leg's inside (x = -25 mm) on the block's +x face, the base's top (z = 5 mm) on the table.
+    corner = np.eye(4)
+    corner[:3, 3] = (0.10 + 0.025, 0.0, -0.005)
+    for seed in (2, 7, 9):  # layouts that turn the block's +x face towards the camera
+        scene = workpiece_scene(np.random.default_rng(seed), {"block": block}, ["block"])
+        share = continued_share(SceneView(scene.cloud), points, normals, scene.instances[0].T_camera_model @ corner)
+        alone = workpiece_scene(np.random.default_rng(seed), {"bracket": bracket}, ["bracket"])
+        share_alone = continued_share(SceneView(alone.cloud), points, normals, alone.instances[0].T_camera_model)
+        assert share > 0.2 and share_alone < 0.05, (seed, share, share_alone)
+
+
 def test_a_pose_that_shows_nothing_continues_nothing():
     scene = workpiece_scene(np.random.default_rng(0), {"small": _block(0.08, 0.06, 0.06)}, ["small"])
     behind = np.eye(4)

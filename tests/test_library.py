@@ -108,6 +108,7 @@ def test_two_meshes_with_one_name_are_refused_before_training(tmp_path, monkeypa
 
 
 def test_bad_settings_name_the_field():
+    from psorr.continuation import ContinuationParams
     from psorr.library import TrainParams
     from psorr.recognize import RecognizeParams
 
@@ -118,5 +119,9 @@ def test_bad_settings_name_the_field():
     with pytest.raises(Exception, match="max_continued must lie in"):
         RecognizeParams(max_continued=2.0)
     assert RecognizeParams(max_continued=None).max_continued is None  # the check can be turned off
+    with pytest.raises(InvalidInputError, match="ContinuationParams.neighbours"):
+        ContinuationParams(neighbours=0)
+    with pytest.raises(InvalidInputError, match="ContinuationParams.ring"):
+        ContinuationParams(ring=0.0)
     with pytest.raises(Exception, match="TrainParams"):
         TrainParams(sample_spacing=0)
