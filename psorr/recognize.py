@@ -305,11 +305,13 @@ class Recognizer:
         detections = []
         for score, model, T, check in scored:
             displaced = claims.rivals(check.supported_blocks, score)
-            if displaced is None or self._on_larger_object(view, model, T):
+            if displaced is None:
                 continue
             # Only now, on the few survivors, is a dense check affordable: it tells a part from its
             # near-symmetric twin pose (a tray turned end for end) by the small features.
             detection = self._resolved(view, model, T)
+            if self._on_larger_object(view, model, detection.T_cloud_model):
+                continue
             claims.add(detection, check.supported_blocks, score, displaced)
             detections.append(detection)
         return detections, claims
