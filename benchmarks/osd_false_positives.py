@@ -4,7 +4,8 @@ to show what the check removes.
 
 The OSD learn set's 45 clouds show boxes, stacked boxes, occluded objects and cylinders on a table.
 None is a catalog part, so every detection of the 8 catalog parts there is false. Prints, per method,
-the detections per scene group and per model and the scenes with any, and writes the list.
+the detections per scene group and per model and the scenes with any, and writes the list (with poses)
+and a picture of what each method reports with its default settings.
 
     python benchmarks/osd_false_positives.py [--osd DIR] [--methods psorr,orr] [--no-check-off] [--out DIR]
 """
@@ -38,6 +39,33 @@ def _group(index: int) -> str:
     return next((name for name, indices in GROUPS if index in indices), "other")
 
 
+def _picture(path: Path, shown, library, columns: int = 4) -> None:
+    """Each (title, cloud, detections) of ``shown`` in a panel, cropped to its detections."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from psorr.render import draw_detections
+
+    rows = -(-len(shown) // columns)
+    fig, axes = plt.subplots(rows, columns, figsize=(3.2 * columns, 3.2 * rows), squeeze=False)
+    for ax in axes.ravel():
+        ax.set_axis_off()
+    for ax, (title, cloud, detections) in zip(axes.ravel(), shown):
+        width, height, drawn = draw_detections(ax, cloud, detections, library, point_size=2.0)
+        (u0, v0), (u1, v1) = np.vstack(drawn).min(axis=0) - 60, np.vstack(drawn).max(axis=0) + 60
+        side = max(u1 - u0, v1 - v0)  # square panels, so every crop shows at one scale per panel
+        uc, vc = (u0 + u1) / 2, (v0 + v1) / 2
+        ax.set_xlim(max(uc - side / 2, 0), min(uc + side / 2, width))
+        ax.set_ylim(min(vc + side / 2, height), max(vc - side / 2, 0))
+        ax.set_title(title, fontsize=8)
+    fig.suptitle("False detections on the OSD learn clouds (default settings); every one is false", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--osd", type=Path, default=DEFAULT_OSD, help="folder of learn*.pcd")
@@ -52,7 +80,7 @@ def main(argv=None) -> int:
         return 0
     catalog = load_catalog()
     library = ModelLibrary.from_meshes([catalog[n].mesh_path for n in sorted(catalog)])
-    records = {}
+    records, shown = {}, []
     settings = [(m, RecognizeParams()) for m in args.methods.split(",")]
     if args.check_off:
         settings += [(m, RecognizeParams(max_continued=None)) for m in args.methods.split(",")]
@@ -61,10 +89,14 @@ def main(argv=None) -> int:
         recognizer = Recognizer(library, method, params)
         records[label] = []
         for path in tqdm(paths, desc=label, file=sys.stderr):
-            result = recognizer.recognize(read_cloud(path), np.random.default_rng(0))
+            cloud = read_cloud(path)
+            result = recognizer.recognize(cloud, np.random.default_rng(0))
             records[label].append({"scene": path.stem, "group": _group(int(path.stem[5:])),
-                                    "detections": [{"model": d.model, "score": round(d.score, 3)}
+                                    "detections": [{"model": d.model, "score": round(d.score, 3),
+                                                    "pose": np.round(d.T_cloud_model, 5).tolist()}
                                                    for d in result.detections]})
+            if result.detections and params.max_continued is not None:
+                shown.append((f"{label}: {path.stem}", cloud, result.detections))
     lines = [f"{len(paths)} OSD learn clouds (none holds a catalog part), all 8 catalog parts as candidates; "
              "every detection is false.", "",
              "| method | false detections | clouds with any | per cloud | median score | score >= 0.8 | "
@@ -85,6 +117,8 @@ def main(argv=None) -> int:
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "osd_false_positives.md").write_text(text + "\n")
     (args.out / "osd_false_positives.json").write_text(json.dumps(records, indent=1) + "\n")
+    if shown:
+        _picture(args.out / "osd_false_positives.png", shown, library)
     return 0
 
 

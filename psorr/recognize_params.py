@@ -40,8 +40,9 @@ class RecognizeParams:
     max_float: float | None = 0.02      # a part's lowest point this far above the supporting plane is no part
     max_shared_pixels: float = 0.3      # a detection sharing more of its pixels with a better one is dropped
     # A pose around whose outline more of the measured surface than this goes on in its faces' planes sits on a
-    # larger object (psorr.continuation): an L bracket in a box's corner. None turns the check off (about 2 ms
-    # a scene). Measured in the README, "Real clouds that hold none of our parts".
+    # larger object (psorr.continuation): an L bracket in a box's corner. None turns the check off (it costs
+    # about 2 ms a scene); parts flush with larger objects (stacked edge to edge, in a fitting corner) need it
+    # off. Measured in the README, "Real clouds that hold none of our parts".
     max_continued: float | None = 0.2
     continuation: ContinuationParams = field(default_factory=ContinuationParams)
     single_plane: SinglePlaneParams = field(default_factory=SinglePlaneParams)  # PSORR: poses from one face

@@ -94,10 +94,12 @@ def save_decomposition_png(path, cloud: PointCloud, labels: np.ndarray, graph: P
     return path
 
 
-def save_detections_png(path, cloud: PointCloud, detections, library) -> Path:
-    """The cloud in grey with each detected model's surface samples drawn in
-    its own colour at the recognised pose, seen from the sensor."""
-    path = Path(path)
+def draw_detections(ax, cloud: PointCloud, detections, library,
+                    point_size: float = 0.3) -> tuple[int, int, list[np.ndarray]]:
+    """Draw the cloud in grey on ``ax``, seen from the sensor (dots of ``point_size`` points squared: larger
+    for a view cropped to a part), with each detected model's surface samples in its own colour at the
+    recognised pose. Returns the image's width and height in pixels and, per
+    detection, its samples' pixels (N, 2): what a caller needs to crop the view to them."""
     valid = cloud.valid_mask
     pts = cloud.points[valid]
     if cloud.is_organised:
@@ -113,10 +115,10 @@ def save_detections_png(path, cloud: PointCloud, detections, library) -> Path:
         u, v = _project(pts, w, h)
     else:
         u, v = f * pts[:, 0] / pts[:, 2] + cx, f * pts[:, 1] / pts[:, 2] + cy
-    fig, ax = plt.subplots(figsize=(w / 80, h / 80 + 0.6), dpi=80)
     shade = np.clip(1.2 - pts[:, 2] / max(pts[:, 2].max(), 1e-6), 0.2, 0.9)
-    ax.scatter(u, v, c=shade, cmap="gray", s=0.3, linewidths=0, vmin=0, vmax=1)
+    ax.scatter(u, v, c=shade, cmap="gray", s=point_size, linewidths=0, vmin=0, vmax=1)
     cmap = plt.get_cmap("tab10")
+    drawn = []
     for k, det in enumerate(detections):
         model = library.model(det.model)
         mp = model.points[:: max(1, len(model.points) // 3000)]
@@ -128,11 +130,22 @@ def save_detections_png(path, cloud: PointCloud, detections, library) -> Path:
             mu, mv = f * cam[:, 0] / cam[:, 2] + cx, f * cam[:, 1] / cam[:, 2] + cy
         ax.scatter(mu, mv, s=1.5, color=cmap(k % 10), linewidths=0, alpha=0.8)
         ax.annotate(f"{det.model} {det.score:.2f}", (np.median(mu), mv.min()), color=cmap(k % 10), fontsize=8,
-                    ha="center", va="bottom", weight="bold")
+                    ha="center", va="bottom", weight="bold", bbox=dict(facecolor="white", alpha=0.7, linewidth=0))
+        drawn.append(np.column_stack([mu, mv]))
     ax.set_xlim(0, w)
     ax.set_ylim(h, 0)
     ax.set_aspect("equal")
     ax.set_axis_off()
+    return w, h, drawn
+
+
+def save_detections_png(path, cloud: PointCloud, detections, library) -> Path:
+    """The cloud in grey with each detected model's surface samples drawn in
+    its own colour at the recognised pose, seen from the sensor."""
+    path = Path(path)
+    w, h = (cloud.width, cloud.height) if cloud.is_organised else (640, 480)
+    fig, ax = plt.subplots(figsize=(w / 80, h / 80 + 0.6), dpi=80)
+    draw_detections(ax, cloud, detections, library)
     ax.set_title(f"{len(detections)} detections", fontsize=9)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, bbox_inches="tight")
