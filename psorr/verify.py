@@ -211,9 +211,9 @@ def _estimate_normals(cloud: o3d.geometry.PointCloud, radius: float, max_nn: int
         cloud.orient_normals_towards_camera_location(np.zeros(3))
 
 
-def visible_model_points(view: SceneView, points: np.ndarray, normals: np.ndarray):
-    """Indices of posed model points (cloud frame) that face the sensor and are
-    not hidden behind nearer points of the same model."""
+def visible_model_pixels(view: SceneView, points: np.ndarray, normals: np.ndarray):
+    """Indices of posed model points (cloud frame) that face the sensor and are not hidden behind nearer
+    points of the same model, and their pixels u, v: three (K,) integer arrays."""
     facing = np.flatnonzero(np.einsum("ij,ij->i", normals, -points) > 0)
     u, v, inside = view.project(points[facing])
     facing, u, v = facing[inside], u[inside], v[inside]
@@ -221,7 +221,14 @@ def visible_model_points(view: SceneView, points: np.ndarray, normals: np.ndarra
     nearest = np.full(block.max() + 1 if len(block) else 1, np.inf)
     np.minimum.at(nearest, block, points[facing, 2])
     tol = depth_tolerance(points[facing, 2], CheckParams())
-    return facing[points[facing, 2] <= nearest[block] + 2 * tol]
+    shown = points[facing, 2] <= nearest[block] + 2 * tol
+    return facing[shown], u[shown], v[shown]
+
+
+def visible_model_points(view: SceneView, points: np.ndarray, normals: np.ndarray) -> np.ndarray:
+    """Indices of posed model points (cloud frame) that face the sensor and are
+    not hidden behind nearer points of the same model."""
+    return visible_model_pixels(view, points, normals)[0]
 
 
 def check_pose(view: SceneView, model_points, model_normals, T_cloud_model, params=CheckParams()) -> PoseCheck:
@@ -230,10 +237,9 @@ def check_pose(view: SceneView, model_points, model_normals, T_cloud_model, para
     R, t = T_cloud_model[:3, :3], T_cloud_model[:3, 3]
     pts = model_points[::stride] @ R.T + t
     nrm = model_normals[::stride] @ R.T
-    visible = visible_model_points(view, pts, nrm)
+    visible, u, v = visible_model_pixels(view, pts, nrm)
     if len(visible) == 0:
         return PoseCheck(0, 0, 0, 0, np.empty(0, dtype=np.int64))
-    u, v, _ = view.project(pts[visible])
     pixel = v * view.width + u
     observed = view.depth[pixel]
     z = pts[visible, 2]
@@ -265,11 +271,10 @@ def refine_icp(view: SceneView, model_points, model_normals, T_cloud_model, max_
     R, t = T_cloud_model[:3, :3], T_cloud_model[:3, 3]
     stride = max(1, len(model_points) // max_points)
     pts, nrm = model_points[::stride] @ R.T + t, model_normals[::stride] @ R.T
-    visible = visible_model_points(view, pts, nrm)
+    visible, u, v = visible_model_pixels(view, pts, nrm)
     if len(visible):
         # Points a nearer surface hides would pair with that surface and drag the part onto it (a U-channel
         # under two others went from its true pose to 0.47 diameters off).
-        u, v, _ = view.project(pts[visible])
         z = pts[visible, 2]
         visible = visible[~(z > view.depth[v * view.width + u] + depth_tolerance(z, CheckParams()))]
     if len(visible) < 10:
