@@ -70,6 +70,7 @@ def _recognize(args) -> int:
     from psorr.io import read_cloud
     from psorr.library import library_from_arguments
     from psorr.recognize import Recognizer
+    from psorr.recognize_params import RecognizeParams
 
     # The scene first: a wrong path should not wait for a new library to train.
     cloud = read_cloud(args.scene)
@@ -77,7 +78,8 @@ def _recognize(args) -> int:
     library = library_from_arguments(args.models, units=args.units,
                                      progress=lambda xs: tqdm(xs, desc="training", file=sys.stderr))
     _log(f"read {args.scene}: {len(cloud)} points; models {', '.join(library.names)}")
-    result = Recognizer(library, method=args.method).recognize(cloud, np.random.default_rng(args.seed))
+    params = RecognizeParams(max_float=None, max_continued=None) if args.stacked else RecognizeParams()
+    result = Recognizer(library, method=args.method, params=params).recognize(cloud, np.random.default_rng(args.seed))
     stats = result.stats
     if args.png:
         from psorr.render import save_detections_png
@@ -124,6 +126,10 @@ def build_parser() -> argparse.ArgumentParser:
     rec.add_argument("--json", action="store_true", help="print exactly one JSON line to stdout")
     rec.add_argument("--png", metavar="OVERLAY.png", help="draw the recognised models over the cloud")
     rec.add_argument("--seed", type=seed, default=0)
+    rec.add_argument("--stacked", action="store_true",
+                     help="parts may lie on other objects or sit flush with them: no limit on how high a part "
+                          "floats over the table, and no continuation check (by default a part whose faces "
+                          "the measured surface continues past its outline is taken to be a larger object)")
     rec.set_defaults(run=_recognize)
     return parser
 

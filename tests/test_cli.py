@@ -62,3 +62,23 @@ def test_a_cloud_in_millimetres_is_refused_with_the_fix(tmp_path):
         assert out.returncode == 2 and "Traceback" not in out.stderr
         assert "scene_mm.ply" in out.stderr and "millimetres: scale it by 0.001" in out.stderr
         assert "training" not in out.stderr  # refused before any model is trained
+
+
+def test_stacked_reports_a_block_flush_with_a_larger_one_that_the_default_takes_for_part_of_it(tmp_path):
+    import trimesh
+
+    from psorr.scenes import workpiece_scene
+
+    def block(x, y, z):
+        return trimesh.creation.box(extents=(x, y, z)).apply_translation((0, 0, z / 2))
+
+    block(0.08, 0.06, 0.06).export(tmp_path / "small.stl")
+    # Seed 1's layout: the small block's faces fit the large block's top and side (tests/test_continuation.py).
+    scene = workpiece_scene(np.random.default_rng(1), {"large": block(0.24, 0.16, 0.06)}, ["large"])
+    write_cloud(tmp_path / "scene.ply", scene.cloud)  # float64: PCD's float32 moves this marginal find
+    found = {}
+    for flags in ((), ("--stacked",)):
+        out = _run("recognize", str(tmp_path / "small.stl"), str(tmp_path / "scene.ply"), "--json", *flags)
+        assert out.returncode == 0, out.stderr
+        found[flags] = json.loads(out.stdout)["detections"]
+    assert found[()] == [] and [d["model"] for d in found[("--stacked",)]] == ["small"]
