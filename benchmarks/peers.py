@@ -13,6 +13,7 @@ ADD is under 0.1 x the model diameter; anything else is a false positive.
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 import time
 from pathlib import Path
@@ -79,15 +80,17 @@ def main(argv=None) -> int:
         names = list(np.random.default_rng(seed).choice(sorted(catalog), size=4, replace=False))
         scenes.append(("clutter", workpiece_scene(np.random.default_rng(1000 + seed), meshes, names, occluder=True)))
     results = {m: {"single": [0, 0, 0], "clutter": [0, 0, 0], "ms": []} for m in chosen}
-    for method in chosen:
-        for kind, scene in tqdm(scenes, desc=method, file=sys.stderr):
+    # Every method on a scene before the next scene: a slow spell of the machine then falls on all methods
+    # alike. Run method after method, two identical runs of PSORR's came to 785 and 934 ms.
+    for kind, scene in tqdm(scenes, desc="scenes, every method", file=sys.stderr):
+        for method in [m for m in chosen if m in results]:
             start = time.perf_counter()
             try:
                 detections = methods[method](scene.cloud, np.random.default_rng(0))
             except PsorrError as exc:
                 print(f"{method}: {exc}", file=sys.stderr)
                 results.pop(method)
-                break
+                continue
             results[method]["ms"].append((time.perf_counter() - start) * 1e3)
             found, false = _grade(scene, detections, catalog, samples)
             tally = results[method][kind]
@@ -112,6 +115,8 @@ def main(argv=None) -> int:
     print(text)
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "peers.md").write_text(text + "\n")
+    (args.out / "peers.json").write_text(json.dumps(
+        {"scenes": [kind for kind, _ in scenes], "results": results}, indent=1) + "\n")
     _plot(results, args.out / "peers.png")
     return 0
 
