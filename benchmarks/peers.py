@@ -81,7 +81,7 @@ def main(argv=None) -> int:
         scenes.append(("clutter", workpiece_scene(np.random.default_rng(1000 + seed), meshes, names, occluder=True)))
     results = {m: {"single": [0, 0, 0], "clutter": [0, 0, 0], "ms": []} for m in chosen}
     # Every method on a scene before the next scene: a slow spell of the machine then falls on all methods
-    # alike. Run method after method, two identical runs of PSORR's came to 785 and 934 ms.
+    # alike. Run method after method, two runs of PSORR whose code differed by 2 ms a scene took 785 and 934 ms.
     for kind, scene in tqdm(scenes, desc="scenes, every method", file=sys.stderr):
         for method in [m for m in chosen if m in results]:
             start = time.perf_counter()
