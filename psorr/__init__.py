@@ -8,6 +8,7 @@ from psorr.decomposition import DecomposeParams, Decomposition, decompose
 from psorr.errors import CloudFileError, InvalidInputError, PsorrError
 from psorr.library import ModelLibrary
 from psorr.recognize import Recognizer
+from psorr.recognize_params import RecognizeParams
 from psorr.types import Detection, OrientedBox, PointCloud, Primitive, PrimitiveKind, PrimitiveShapeGraph
 
 __all__ = [
@@ -16,6 +17,7 @@ __all__ = [
     "Detection",
     "ModelLibrary",
     "Recognizer",
+    "RecognizeParams",
     "DecomposeParams",
     "InvalidInputError",
     "OrientedBox",

@@ -65,8 +65,7 @@ def test_a_pose_that_shows_nothing_continues_nothing():
 
 
 def test_the_recognizer_drops_a_small_block_found_on_a_large_one_unless_the_check_is_off(tmp_path, monkeypatch):
-    from psorr import ModelLibrary, Recognizer
-    from psorr.recognize_params import RecognizeParams
+    from psorr import ModelLibrary, RecognizeParams, Recognizer
 
     monkeypatch.setenv("PSORR_CACHE", str(tmp_path / "cache"))
     _block(0.08, 0.06, 0.06).export(tmp_path / "small.stl")
