@@ -54,7 +54,8 @@ def _picture(path: Path, shown, library, columns: int = 4) -> None:
         ax.set_axis_off()
     for ax, (title, cloud, detections) in zip(axes.ravel(), shown):
         width, height, drawn = draw_detections(ax, cloud, detections, library, point_size=2.0)
-        (u0, v0), (u1, v1) = np.vstack(drawn).min(axis=0) - 60, np.vstack(drawn).max(axis=0) + 60
+        pixels = np.vstack(drawn)
+        (u0, v0), (u1, v1) = pixels.min(axis=0) - 60, pixels.max(axis=0) + 60
         side = max(u1 - u0, v1 - v0)  # square panels, so every crop shows at one scale per panel
         uc, vc = (u0 + u1) / 2, (v0 + v1) / 2
         ax.set_xlim(max(uc - side / 2, 0), min(uc + side / 2, width))

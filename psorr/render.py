@@ -94,6 +94,11 @@ def save_decomposition_png(path, cloud: PointCloud, labels: np.ndarray, graph: P
     return path
 
 
+def _image_size(cloud: PointCloud) -> tuple[int, int]:
+    """Width and height in pixels of the sensor's view of ``cloud``: its grid's, or a Kinect's 640x480."""
+    return (cloud.width, cloud.height) if cloud.is_organised else (640, 480)
+
+
 def draw_detections(ax, cloud: PointCloud, detections, library,
                     point_size: float = 0.3) -> tuple[int, int, list[np.ndarray]]:
     """Draw the cloud in grey on ``ax``, seen from the sensor (dots of ``point_size`` points squared: larger
@@ -102,15 +107,15 @@ def draw_detections(ax, cloud: PointCloud, detections, library,
     detection, its samples' pixels (N, 2): what a caller needs to crop the view to them."""
     valid = cloud.valid_mask
     pts = cloud.points[valid]
+    w, h = _image_size(cloud)
     if cloud.is_organised:
         rows, cols = np.divmod(np.flatnonzero(valid), cloud.width)
-        w, h = cloud.width, cloud.height
         f = 525.0
         # Recover the pinhole from the organised grid, so model points land on their pixels.
         cx = float(np.median(cols - f * pts[:, 0] / pts[:, 2]))
         cy = float(np.median(rows - f * pts[:, 1] / pts[:, 2]))
     else:
-        w, h, f = 640, 480, None
+        f = None
     if f is None:
         u, v = _project(pts, w, h)
     else:
@@ -143,7 +148,7 @@ def save_detections_png(path, cloud: PointCloud, detections, library) -> Path:
     """The cloud in grey with each detected model's surface samples drawn in
     its own colour at the recognised pose, seen from the sensor."""
     path = Path(path)
-    w, h = (cloud.width, cloud.height) if cloud.is_organised else (640, 480)
+    w, h = _image_size(cloud)
     fig, ax = plt.subplots(figsize=(w / 80, h / 80 + 0.6), dpi=80)
     draw_detections(ax, cloud, detections, library)
     ax.set_title(f"{len(detections)} detections", fontsize=9)

@@ -238,7 +238,7 @@ SENSOR_RANGE_LIMIT = 25.0  # m: beyond any Kinect-class sensor's reach (about 10
 
 def require_sensor_metres(cloud: PointCloud, what: str) -> None:
     """Refuse a cloud that is evidently not in metres about the sensor: the median distance of its
-    (every 97th valid) points from the origin beyond SENSOR_RANGE_LIMIT, as a Kinect cloud in
+    points (the finite ones among every 97th) from the origin beyond SENSOR_RANGE_LIMIT, as a Kinect cloud in
     millimetres (about 800) is. ``what`` names the cloud in the message (a file, or "the cloud")."""
     sample = cloud.points[::97]
     sample = sample[np.isfinite(sample).all(axis=1)]
