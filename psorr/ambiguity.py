@@ -30,9 +30,10 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from psorr.depth_compare import DepthRenderer, residual_costs
+from psorr.point_check import CheckParams, PoseCheck, check_pose
 from psorr.rotations import turn
 from psorr.types import PrimitiveKind
-from psorr.verify import CheckParams, PoseCheck, SceneView, check_pose, refine_icp
+from psorr.verify import SceneView, refine_icp
 
 NEAR_MEAN_DISTANCE = 0.03  # x model diameter: turns moving the surface less than this on average are near-symmetries
 EXACT_DISTANCE = 2e-4  # m: a turn moving no sample further than this from the mesh is an exact symmetry

@@ -23,7 +23,8 @@ from scipy.ndimage import binary_closing, binary_dilation
 from scipy.spatial import cKDTree
 
 from psorr.errors import InvalidInputError
-from psorr.verify import CheckParams, SceneView, depth_tolerance, visible_model_points
+from psorr.point_check import CheckParams, depth_tolerance, visible_model_points
+from psorr.verify import SceneView
 
 
 @dataclass(frozen=True)

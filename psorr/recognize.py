@@ -32,6 +32,7 @@ from psorr.decomposition.detail import decompose_leftovers
 from psorr.errors import InvalidInputError
 from psorr.library import ModelLibrary
 from psorr.orr import orr_hypotheses
+from psorr.point_check import CheckParams, check_pose, check_poses
 from psorr.pose_clusters import densest_poses, share_out
 from psorr.ppf import scene_oriented_points
 from psorr.primitive_match import PrimitiveSizes
@@ -40,7 +41,7 @@ from psorr.single_plane import SinglePlaneMatcher
 from psorr.support_crop import crop_to_parts
 from psorr.types import Detection, PointCloud, PrimitiveKind, random_generator, require_sensor_metres
 from psorr.unexplained import blanked, on_detected_surface, part_sized, standing_points, standing_unexplained
-from psorr.verify import CheckParams, SceneView, check_pose, refine_icp
+from psorr.verify import SceneView, refine_icp
 
 _COARSE = CheckParams(max_points=300)
 _TABLE_EXTENT = 1.2  # in diameters of the largest model: a primitive larger than this is the table
@@ -266,8 +267,9 @@ class Recognizer:
     def _best_face_poses(self, view, poses, models) -> list[tuple[int, np.ndarray]]:
         # Boxes cannot rank these (one face covers little of a model's boxes); a coarse point check can.
         sp = self.params.single_plane
-        scores = np.array([check_pose(view, self.library.models[m].points, self.library.models[m].normals, T,
-                                      sp.check).score for T, m in zip(poses, models)])
+        scores = np.array([c.score for c in check_poses(view, [self.library.models[m].points for m in models],
+                                                         [self.library.models[m].normals for m in models],
+                                                         poses, sp.check)])
         order = np.argsort(-scores, kind="stable")
         order = share_out(order[scores[order] >= sp.min_score], models, sp.top)
         return [(models[k], poses[k]) for k in order]

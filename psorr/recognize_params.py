@@ -7,10 +7,10 @@ from dataclasses import dataclass, field
 from psorr.continuation import ContinuationParams
 from psorr.decomposition import DecomposeParams
 from psorr.errors import InvalidInputError
+from psorr.point_check import CheckParams
 from psorr.single_plane import SinglePlaneParams
 from psorr.support_crop import SupportCropParams
 from psorr.types import Detection
-from psorr.verify import CheckParams
 
 METHODS = ("psorr", "orr")
 

@@ -20,8 +20,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from psorr.point_check import CheckParams
 from psorr.types import Primitive, PrimitiveKind
-from psorr.verify import CheckParams
 
 _IN_PLANE_COS = 0.7  # box axes less aligned than this with the normal lie in the plane
 

@@ -1,24 +1,20 @@
-"""Point-level acceptance of a pose, and its ICP refinement.
+"""A scene as the checks see it, and ICP refinement of a pose.
 
 The cloud is rasterised into a depth buffer seen from its sensor at the
-origin. Each model point that would face the sensor under the pose, and is
-not hidden by the model itself, is then either supported (it lies on the
-measured surface), a violation (it lies in front of the measured surface,
-where the sensor saw through it), occluded (something nearer hides it) or
-unknown (no measurement there).
+origin (SceneView), against which psorr.point_check judges poses, with a
+downsampled copy for point-to-plane ICP (refine_icp).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
 import open3d as o3d
 
 from psorr.icp import register
-from psorr.kinect_noise import KINECT_V1
 from psorr.open3d_threads import single_threaded
+from psorr.point_check import CheckParams, depth_tolerance, visible_model_pixels
 from psorr.types import PointCloud
 
 KINECT_FOCAL = 525.0  # pixels of a 640-wide Kinect v1 image
@@ -27,51 +23,6 @@ _NORMAL_MARGIN = 0.03  # m of ICP-target normals kept beyond the crop that neede
 # Pixels (of a 640-wide Kinect image) around an unmeasured pixel searched for a nearer surface: the
 # projector's shadow beside a nearer edge is a few centimetres wide at a metre.
 SHADOW_REACH = 8
-
-
-@dataclass(frozen=True)
-class CheckParams:
-    """Tolerances of the point check: depth agreement is max(min_tolerance, sigmas x Kinect sigma(z))."""
-
-    sigmas: float = 3.0
-    min_tolerance: float = 0.004
-    max_points: int = 1500
-
-
-@dataclass(frozen=True)
-class PoseCheck:
-    """Counts over the model's self-visible sample points, and the verdicts derived from them."""
-
-    n_visible: int
-    n_support: int
-    n_violation: int
-    n_occluded: int
-    supported_blocks: np.ndarray  # flat indices of the 4x4-pixel blocks the model explains
-
-    @property
-    def visible_fraction(self) -> float:
-        return self.n_support / self.n_visible if self.n_visible else 0.0
-
-    @property
-    def unblocked_fraction(self) -> float:
-        """Like visible_fraction, over only the points no nearer surface hides: a part behind others
-        is judged by what the sensor could see of it."""
-        open_ = self.n_visible - self.n_occluded
-        return self.n_support / open_ if open_ > 0 else 0.0
-
-    @property
-    def violation_ratio(self) -> float:
-        seen = self.n_support + self.n_violation
-        return self.n_violation / seen if seen else 1.0
-
-    @property
-    def score(self) -> float:
-        return float(np.clip(self.visible_fraction * (1.0 - self.violation_ratio), 0.0, 1.0))
-
-
-def depth_tolerance(z: np.ndarray, params: CheckParams) -> np.ndarray:
-    sigma = KINECT_V1.depth_sigma(z)
-    return np.maximum(params.min_tolerance, params.sigmas * sigma)
 
 
 def buffer_focal(cloud: PointCloud, ux: np.ndarray, uy: np.ndarray) -> float:
@@ -209,58 +160,6 @@ def _estimate_normals(cloud: o3d.geometry.PointCloud, radius: float, max_nn: int
     if len(cloud.points) >= 3:
         cloud.estimate_normals(o3d.geometry.KDTreeSearchParamHybrid(radius=radius, max_nn=max_nn))
         cloud.orient_normals_towards_camera_location(np.zeros(3))
-
-
-def visible_model_pixels(view: SceneView, points: np.ndarray, normals: np.ndarray):
-    """Indices of posed model points (cloud frame) that face the sensor and are not hidden behind nearer
-    points of the same model, and their pixels u, v: three (K,) integer arrays."""
-    facing = np.flatnonzero(np.einsum("ij,ij->i", normals, -points) > 0)
-    u, v, inside = view.project(points[facing])
-    facing, u, v = facing[inside], u[inside], v[inside]
-    block = view.block_of(u, v)
-    nearest = np.full(block.max() + 1 if len(block) else 1, np.inf)
-    np.minimum.at(nearest, block, points[facing, 2])
-    tol = depth_tolerance(points[facing, 2], CheckParams())
-    shown = points[facing, 2] <= nearest[block] + 2 * tol
-    return facing[shown], u[shown], v[shown]
-
-
-def visible_model_points(view: SceneView, points: np.ndarray, normals: np.ndarray) -> np.ndarray:
-    """Indices of posed model points (cloud frame) that face the sensor and are
-    not hidden behind nearer points of the same model."""
-    return visible_model_pixels(view, points, normals)[0]
-
-
-def check_pose(view: SceneView, model_points, model_normals, T_cloud_model, params=CheckParams()) -> PoseCheck:
-    """Classify the model's self-visible points under the pose (see the module docstring)."""
-    stride = max(1, len(model_points) // params.max_points)
-    R, t = T_cloud_model[:3, :3], T_cloud_model[:3, 3]
-    pts = model_points[::stride] @ R.T + t
-    nrm = model_normals[::stride] @ R.T
-    visible, u, v = visible_model_pixels(view, pts, nrm)
-    if len(visible) == 0:
-        return PoseCheck(0, 0, 0, 0, np.empty(0, dtype=np.int64))
-    pixel = v * view.width + u
-    observed = view.depth[pixel]
-    z = pts[visible, 2]
-    tol = depth_tolerance(z, params)
-    support = np.abs(z - observed) < tol
-    violation = np.isfinite(observed) & (z < observed - tol)
-    occluded = np.isfinite(observed) & (z > observed + tol)
-    # An unmeasured pixel beside a nearer surface is that surface's shadow (a Kinect's projector sits
-    # 7.5 cm from its camera): hidden, like what the surface covers. Counted as unknown, a bushing under
-    # the arm kept 0.36 of its unhidden points, and was rejected at its true pose.
-    occluded |= ~np.isfinite(observed) & (z > view.nearby_depth[pixel] + tol)
-    n_violation = int(violation.sum())
-    if view.support_plane is not None:
-        # Model points under the supporting plane are impossible: a pose that
-        # sinks a part into the table would otherwise pass on the table's points.
-        below = pts @ view.support_plane[:3] + view.support_plane[3] < -np.maximum(tol.min(), 0.005)
-        n_violation += int(below.sum() * len(visible) / len(pts))
-    # Blocks, not pixels: two poses of one instance check different samples of
-    # its points, so only coarse cells tell that they explain the same surface.
-    blocks = view.block_of(u, v)
-    return PoseCheck(len(visible), int(support.sum()), n_violation, int(occluded.sum()), np.unique(blocks[support]))
 
 
 def refine_icp(view: SceneView, model_points, model_normals, T_cloud_model, max_distance: float,

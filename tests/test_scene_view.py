@@ -9,8 +9,9 @@ import open3d as o3d
 import pytest
 
 from psorr.open3d_threads import single_threaded
+from psorr.point_check import PoseCheck
 from psorr.scenes import workpiece_scene
-from psorr.verify import PoseCheck, SceneView
+from psorr.verify import SceneView
 from psorr.workpieces import load_catalog
 
 
@@ -65,7 +66,7 @@ def test_an_unorganised_whole_surface_cloud_does_not_look_seen_through_at_the_tr
     from pathlib import Path
 
     from psorr.library import ModelLibrary
-    from psorr.verify import CheckParams, check_pose
+    from psorr.point_check import CheckParams, check_pose
 
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))  # scripts, not a package
     from table1_views import FULL_SPACING, full_view, thin_voxel
@@ -94,7 +95,7 @@ def test_unmeasured_pixels_beside_a_nearer_surface_count_as_hidden():
     # over the bushing, so half its sensor-facing points have no measurement. They are hidden, as if the
     # capsule covered them, and what is left in view is almost all measured.
     from psorr.library import ModelLibrary
-    from psorr.verify import check_pose, visible_model_points
+    from psorr.point_check import check_pose, visible_model_points
 
     catalog = load_catalog()
     names = list(np.random.default_rng(2).choice(sorted(catalog), size=4, replace=False))
