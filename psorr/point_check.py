@@ -22,6 +22,10 @@ import numpy as np
 from psorr.errors import InvalidInputError
 from psorr.kinect_noise import KINECT_V1
 
+# Self-occlusion cells (pose x pixel block) indexed directly up to this many (32 MB of float64); beyond,
+# only the cells in use are. A 640x480 buffer has about 19500 blocks: 64 poses take 1.25 million.
+_MAX_CELLS = 4_000_000
+
 
 @dataclass(frozen=True)
 class CheckParams:
@@ -79,7 +83,11 @@ def _visible(view, points, normals, owner, n_poses):
     block = view.block_of(u, v)
     span = int(block.max()) + 1 if len(block) else 1
     cell = owner[facing] * span + block
-    nearest = np.full(n_poses * span, np.inf)
+    size = n_poses * span
+    if size > _MAX_CELLS:  # a fine buffer (a dense unorganised cloud): number only the cells in use
+        used, cell = np.unique(cell, return_inverse=True)
+        size = len(used)
+    nearest = np.full(size, np.inf)
     np.minimum.at(nearest, cell, points[facing, 2])
     tol = depth_tolerance(points[facing, 2], CheckParams())
     shown = points[facing, 2] <= nearest[cell] + 2 * tol

@@ -73,3 +73,17 @@ def test_mismatched_poses_and_models_are_refused(scene_and_models):
         check_poses(view, [model.points], [model.normals], np.eye(4))
     with pytest.raises(InvalidInputError, match="2 point and 1 normal arrays"):
         check_poses(view, [model.points] * 2, [model.normals], np.stack([np.eye(4)] * 2))
+
+
+def test_a_fine_buffer_numbers_only_the_self_occlusion_cells_in_use(scene_and_models, monkeypatch):
+    # A dense unorganised cloud has a fine depth buffer: poses x blocks would not fit in memory.
+    import psorr.point_check as point_check
+
+    scene, library = scene_and_models
+    view = SceneView(scene.cloud)
+    models = [library.model(i.name) for i in scene.instances]
+    poses = np.array([i.T_camera_model for i in scene.instances])
+    args = ([m.points for m in models], [m.normals for m in models], poses)
+    direct = check_poses(view, *args)
+    monkeypatch.setattr(point_check, "_MAX_CELLS", 10)
+    assert [_counts(c) for c in check_poses(view, *args)] == [_counts(c) for c in direct]
