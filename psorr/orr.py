@@ -56,13 +56,11 @@ def orr_hypotheses(recognizer, cloud, view, rng):
     # one at a time, numpy's per-call overhead cost as much as the check itself.
     scored, elapsed = [], 0.0
     for start in range(0, len(drawn_poses), _BATCH):
-        models = drawn_models[start:start + _BATCH]
+        poses, models = np.array(drawn_poses[start:start + _BATCH]), drawn_models[start:start + _BATCH]
         t0 = time.perf_counter()
         checks = check_poses(view, [library.models[m].points for m in models],
-                             [library.models[m].normals for m in models], np.array(drawn_poses[start:start + _BATCH]),
-                             p.check)
+                             [library.models[m].normals for m in models], poses, p.check)
         elapsed += (time.perf_counter() - t0) * 1e3
-        scored += [(c.score, m, T) for c, m, T in zip(checks, models, drawn_poses[start:start + _BATCH])
-                   if c.n_support >= p.min_support // 2]
+        scored += [(c.score, m, T) for c, m, T in zip(checks, models, poses) if c.n_support >= p.min_support // 2]
     scored.sort(key=lambda s: -s[0])
     return [(m, T) for _, m, T in scored[: p.refine_top]], len(drawn_poses), elapsed
