@@ -29,7 +29,7 @@ def standing_points(cloud: PointCloud, plane: np.ndarray | None, off_plane: floa
     """(N,) bool over ``cloud``'s points: finite, and more than ``off_plane`` metres above the supporting
     ``plane`` (a, b, c, d; the sensor on its positive side); every finite point when there is no plane."""
     points = cloud.points
-    finite = np.isfinite(points).all(axis=1)
+    finite = cloud.valid_mask
     standing = finite.copy()
     if plane is not None:
         standing[finite] = points[finite] @ np.asarray(plane[:3]) + plane[3] > off_plane

@@ -34,7 +34,7 @@ def decompose_leftovers(cloud: PointCloud, coarse: Decomposition, voxel_size: fl
     if not voxel_size > 0:
         raise InvalidInputError(f"the leftover pass needs a voxel size > 0 metres, got {voxel_size}")
     start = time.perf_counter()
-    left = np.flatnonzero((coarse.labels < 0) & np.isfinite(cloud.points).all(axis=1))
+    left = np.flatnonzero((coarse.labels < 0) & cloud.valid_mask)
     if len(left) < params.min_points:
         return coarse
     fine = decompose(PointCloud(cloud.points[left]), dataclasses.replace(params, voxel_size=voxel_size), rng)
