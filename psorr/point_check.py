@@ -46,6 +46,9 @@ class PoseCheck:
     n_violation: int
     n_occluded: int
     supported_blocks: np.ndarray  # flat indices of the 4x4-pixel blocks the model explains
+    # Supported points higher above the supporting plane than their depth tolerance; all supported points
+    # when the view has no supporting plane. The rest the table explains as well as the model does.
+    n_support_above_table: int
 
     @property
     def visible_fraction(self) -> float:
@@ -149,19 +152,24 @@ def check_poses(view, model_points: Sequence[np.ndarray], model_normals: Sequenc
     # 7.5 cm from its camera): hidden, like what the surface covers. Counted as unknown, a bushing under
     # the arm kept 0.36 of its unhidden points, and was rejected at its true pose.
     occluded |= ~np.isfinite(observed) & (z > view.nearby_depth[pixel] + tol)
+    heights = np.concatenate(heights) if plane is not None else None
+    # A thin part lying flat (a circuit board's 1.6 mm) is supported by the table wherever it is posed on
+    # it, and at 1.6 m, where the tolerance is 22 mm, so are its components: such support is no evidence.
+    above_table = support if plane is None else support & (heights[visible] > tol)
 
     def count(mask):
         return np.bincount(who[mask], minlength=P)
 
     n_visible = np.bincount(who, minlength=P)
     n_support, n_violation, n_occluded = count(support), count(violation), count(occluded)
+    n_above_table = count(above_table)
     if plane is not None:
         # Model points under the supporting plane are impossible: a pose that sinks a part into the
         # table would otherwise pass on the table's points. Below by more than the pose's tightest
         # tolerance (at least 5 mm), counted in proportion to the share of points judged.
         tightest = np.full(P, np.inf)
         np.minimum.at(tightest, who, tol)
-        below = np.concatenate(heights) < -np.maximum(tightest, 0.005)[owner]
+        below = heights < -np.maximum(tightest, 0.005)[owner]
         n_violation += (np.bincount(owner[below], minlength=P) * n_visible / n_points).astype(np.int64)
     # Blocks, not pixels: two poses of one instance check different samples of its points, so
     # only coarse cells tell that they explain the same surface.
@@ -169,5 +177,5 @@ def check_poses(view, model_points: Sequence[np.ndarray], model_normals: Sequenc
     cells = np.unique(who[support] * span + view.block_of(u[support], v[support]))
     ends = np.searchsorted(cells, np.arange(P + 1) * span)
     return [PoseCheck(int(n_visible[k]), int(n_support[k]), int(n_violation[k]), int(n_occluded[k]),
-                      cells[ends[k]:ends[k + 1]] - k * span) if n_visible[k] else
-            PoseCheck(0, 0, 0, 0, np.empty(0, dtype=np.int64)) for k in range(P)]
+                      cells[ends[k]:ends[k + 1]] - k * span, int(n_above_table[k])) if n_visible[k] else
+            PoseCheck(0, 0, 0, 0, np.empty(0, dtype=np.int64), 0) for k in range(P)]

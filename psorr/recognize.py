@@ -298,7 +298,9 @@ class Recognizer:
             check = check_pose(view, model.points, model.normals, T, p.check)
             seen_enough = (check.visible_fraction >= p.min_visible_fraction
                            or check.unblocked_fraction >= p.min_unblocked_fraction)
-            if (check.n_support >= p.min_support and seen_enough and check.violation_ratio <= p.max_violation_ratio
+            enough_support = (check.n_support >= p.min_support
+                              and check.n_support_above_table >= p.min_support_above_table)
+            if (enough_support and seen_enough and check.violation_ratio <= p.max_violation_ratio
                     and not self._floats(view, model, T)):
                 scored.append((check.score, model, T, check))
         scored.sort(key=lambda s: -s[0])

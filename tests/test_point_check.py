@@ -87,3 +87,27 @@ def test_a_fine_buffer_numbers_only_the_self_occlusion_cells_in_use(scene_and_mo
     direct = check_poses(view, *args)
     monkeypatch.setattr(point_check, "_MAX_CELLS", 10)
     assert [_counts(c) for c in check_poses(view, *args)] == [_counts(c) for c in direct]
+
+
+def test_support_the_table_explains_as_well_is_not_counted_above_it():
+    # A circuit board is 1.6 mm thick: posed flat anywhere on a bare table, its face is supported by the
+    # table. Only its components, at the true pose, stand higher than the depth tolerance.
+    from psorr.recognize_params import RecognizeParams
+
+    catalog = load_catalog()
+    library = ModelLibrary.from_meshes([catalog["circuit_board"].mesh_path])
+    board = library.model("circuit_board")
+    needed = RecognizeParams().min_support_above_table
+    for seed in range(2):
+        scene = workpiece_scene(np.random.default_rng(seed), {"circuit_board": catalog["circuit_board"].load_mesh()},
+                                ["circuit_board"])
+        view = SceneView(scene.cloud)
+        T_true = scene.instances[0].T_camera_model
+        true = check_pose(view, board.points, board.normals, T_true)
+        assert true.n_support_above_table > 4 * needed and true.n_support_above_table < true.n_support
+        for dx in (-0.15, 0.15):  # slid along the table, onto bare table
+            T_world_shift = np.eye(4)
+            T_world_shift[0, 3] = dx
+            T_slid = np.linalg.inv(scene.T_world_camera) @ T_world_shift @ scene.T_world_camera @ T_true
+            slid = check_pose(view, board.points, board.normals, T_slid)
+            assert slid.n_support > 400 and slid.n_support_above_table < needed / 2, (seed, dx, slid)

@@ -82,11 +82,11 @@ def test_an_unorganised_whole_surface_cloud_does_not_look_seen_through_at_the_tr
 
 def test_the_unblocked_fraction_leaves_out_what_nearer_surfaces_hide():
     check = PoseCheck(n_visible=200, n_support=60, n_violation=5, n_occluded=100,
-                      supported_blocks=np.empty(0, dtype=np.int64))
+                      supported_blocks=np.empty(0, dtype=np.int64), n_support_above_table=60)
     assert check.visible_fraction == pytest.approx(0.3)
     assert check.unblocked_fraction == pytest.approx(0.6)
     hidden = PoseCheck(n_visible=50, n_support=0, n_violation=0, n_occluded=50,
-                       supported_blocks=np.empty(0, dtype=np.int64))
+                       supported_blocks=np.empty(0, dtype=np.int64), n_support_above_table=0)
     assert hidden.unblocked_fraction == 0.0
 
 
