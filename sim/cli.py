@@ -112,10 +112,12 @@ def _run(args) -> int:
     if args.json:
         print(json.dumps(summary))
         return 0
-    print(f"{'ep':>3} {'part':<15} {'grasp':<14} {'grasped':>7} {'lift m':>6} {'placed':>6} "
+    # Catalog grasp names run to 16 characters ("outer_limb_pos_x"); the column takes the longest shown.
+    width = max([14] + [len(p.grasp_name or "-") for _, p in rows])
+    print(f"{'ep':>3} {'part':<15} {'grasp':<{width}} {'grasped':>7} {'lift m':>6} {'placed':>6} "
           f"{'pose err mm':>11} {'rot err deg':>11} {'looks':>5}  note")
     for episode, p in rows:
-        print(f"{episode:>3} {p.part:<15} {p.grasp_name or '-':<14} {str(p.grasped):>7} {p.lifted_m:>6.3f} "
+        print(f"{episode:>3} {p.part:<15} {p.grasp_name or '-':<{width}} {str(p.grasped):>7} {p.lifted_m:>6.3f} "
               f"{str(p.placed):>6} {p.pose_error_mm:>11.1f} {p.rot_error_deg:>11.1f} {p.looks:>5}  {p.note}")
     print(f"\n{summary['picks']} picks in {args.episodes} episodes ({args.poses} poses, occluder {args.occluder}): "
           f"grasp success {summary['grasp_success_rate']:.0%}, place success {summary['place_success_rate']:.0%}, "
