@@ -119,6 +119,9 @@ def test_bad_settings_name_the_field():
     with pytest.raises(Exception, match="max_continued must lie in"):
         RecognizeParams(max_continued=2.0)
     assert RecognizeParams(max_continued=None).max_continued is None  # the check can be turned off
+    with pytest.raises(InvalidInputError, match="min_support_above_table must be >= 0"):
+        RecognizeParams(min_support_above_table=-1)
+    assert RecognizeParams(min_support_above_table=0).min_support_above_table == 0  # and this one
     with pytest.raises(InvalidInputError, match="ContinuationParams.neighbours"):
         ContinuationParams(neighbours=0)
     with pytest.raises(InvalidInputError, match="ContinuationParams.ring"):
