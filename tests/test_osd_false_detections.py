@@ -7,19 +7,9 @@ import numpy as np
 import pytest
 
 from psorr.io import read_cloud
-from psorr.library import ModelLibrary
 from psorr.recognize import RecognizeParams, Recognizer
-from psorr.workpieces import DEFAULT_CATALOG
 
 LEARN = Path(__file__).resolve().parents[2] / "shared/osd/learn"
-
-
-@pytest.fixture(scope="module")
-def library(tmp_path_factory):
-    import os
-
-    os.environ["PSORR_CACHE"] = str(tmp_path_factory.mktemp("cache"))
-    return ModelLibrary.from_meshes(sorted((DEFAULT_CATALOG.parent / "meshes").glob("*.stl")))
 
 
 @pytest.mark.parametrize(("scene", "method", "model"), [("learn3", "orr", "circuit_board"),

@@ -16,27 +16,16 @@ import pytest
 
 from psorr.errors import InvalidInputError
 from psorr.io import write_cloud
-from psorr.library import ModelLibrary
 from psorr.recognize import RecognizeParams, Recognizer
 from psorr.scenes import workpiece_scene
 from psorr.types import PointCloud
 from psorr.verify import SceneView
-from psorr.workpieces import DEFAULT_CATALOG, load_catalog, symmetric_add
-
-MESHES = DEFAULT_CATALOG.parent / "meshes"
+from psorr.workpieces import load_catalog, symmetric_add
 
 
 @pytest.fixture(scope="module")
 def catalog():
     return load_catalog()
-
-
-@pytest.fixture(scope="module")
-def library(tmp_path_factory):
-    import os
-
-    os.environ["PSORR_CACHE"] = str(tmp_path_factory.mktemp("cache"))
-    return ModelLibrary.from_meshes(sorted(MESHES.glob("*.stl")))  # all 8 parts: 6+ models, as in the issue
 
 
 def _matches(det, instance, library, catalog) -> bool:

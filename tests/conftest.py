@@ -1,0 +1,16 @@
+"""Fixtures shared by test modules."""
+
+import os
+
+import pytest
+
+from psorr.library import ModelLibrary
+from psorr.workpieces import DEFAULT_CATALOG
+
+
+@pytest.fixture(scope="module")
+def library(tmp_path_factory):
+    """All 8 catalog parts (6+ models, as in the issue), trained into a fresh cache. A module that needs
+    other models defines its own ``library``, which takes precedence."""
+    os.environ["PSORR_CACHE"] = str(tmp_path_factory.mktemp("cache"))
+    return ModelLibrary.from_meshes(sorted((DEFAULT_CATALOG.parent / "meshes").glob("*.stl")))
