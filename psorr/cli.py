@@ -9,8 +9,12 @@ from pathlib import Path
 
 import numpy as np
 
-from psorr.errors import PsorrError
+from psorr.errors import CloudFileError, InvalidInputError, PsorrError
 from psorr.types import require_sensor_metres
+
+
+# DecomposeParams.voxel_size, which a test holds this to: importing the pipeline for --help costs a second.
+DEFAULT_VOXEL_SIZE = 0.012
 
 
 def _log(message: str) -> None:
@@ -24,8 +28,12 @@ def _decompose(args) -> int:
     cloud = read_cloud(args.cloud)
     require_sensor_metres(cloud, str(args.cloud))
     _log(f"read {args.cloud}: {len(cloud)} points, {int(cloud.valid_mask.sum())} finite")
-    params = DecomposeParams(voxel_size=args.voxel_size) if args.voxel_size else DecomposeParams()
-    result = decompose(cloud, params, np.random.default_rng(args.seed))
+    params = DecomposeParams() if args.voxel_size is None else DecomposeParams(voxel_size=args.voxel_size)
+    try:
+        result = decompose(cloud, params, np.random.default_rng(args.seed))
+    except InvalidInputError as exc:
+        # Too few points, or too few voxels at this size: a problem of this file, so it is named.
+        raise CloudFileError(args.cloud, str(exc).replace("voxel_size", "--voxel-size")) from None
     graph = result.graph
     if args.out:
         out = Path(args.out)
@@ -112,7 +120,7 @@ def build_parser() -> argparse.ArgumentParser:
     dec.add_argument("--out", metavar="LABELS.npy", help="write one int64 primitive index per input point (-1: none)")
     dec.add_argument("--json", action="store_true", help="print one JSON line instead of a table")
     dec.add_argument("--png", metavar="PICTURE.png", help="render the cloud coloured by primitive")
-    dec.add_argument("--voxel-size", type=float, default=None, help="working resolution in metres (default 0.01)")
+    dec.add_argument("--voxel-size", type=float, default=None, help=f"working resolution in metres (default {DEFAULT_VOXEL_SIZE})")
     dec.add_argument("--seed", type=seed, default=0, help="seed of the RANSAC sampling (default 0)")
     dec.set_defaults(run=_decompose)
     rec = sub.add_parser("recognize", help="find CAD-trained workpieces and their poses in a depth cloud")

@@ -44,6 +44,35 @@ def test_bad_file_gives_one_line_error_not_a_traceback(tmp_path):
     assert missing.returncode == 2 and "nowhere.ply" in missing.stderr
 
 
+def test_a_cloud_too_small_to_decompose_is_named_with_the_fix(tmp_path):
+    few = tmp_path / "few.xyz"
+    few.write_text("0 0 1\n0.01 0 1\n0 0.01 1\n")
+    out = _run("decompose", str(few))
+    assert out.returncode == 2 and "Traceback" not in out.stderr
+    assert "few.xyz" in out.stderr and "3 finite points" in out.stderr
+    scene = synthetic.box_on_table(np.random.default_rng(0))
+    path = tmp_path / "scene.npy"
+    np.save(path, scene.cloud.points)
+    coarse = _run("decompose", str(path), "--voxel-size", "5")
+    assert coarse.returncode == 2 and "scene.npy" in coarse.stderr and "smaller --voxel-size" in coarse.stderr
+
+
+def test_voxel_size_zero_is_refused_not_taken_for_the_default(tmp_path):
+    scene = synthetic.box_on_table(np.random.default_rng(0))
+    path = tmp_path / "scene.npy"
+    np.save(path, scene.cloud.points)
+    out = _run("decompose", str(path), "--voxel-size", "0")
+    assert out.returncode == 2 and "voxel_size must be > 0" in out.stderr
+
+
+def test_help_states_the_decomposition_default_voxel_size():
+    from psorr.cli import DEFAULT_VOXEL_SIZE
+    from psorr.decomposition import DecomposeParams
+
+    assert DEFAULT_VOXEL_SIZE == DecomposeParams().voxel_size
+    assert f"(default {DEFAULT_VOXEL_SIZE})" in _run("decompose", "--help").stdout
+
+
 def test_recognize_reads_the_scene_before_it_trains_models(tmp_path):
     # Training new meshes can take a while; a mistyped scene path should be reported at once.
     mesh = tmp_path / "not_a_mesh.stl"

@@ -14,7 +14,7 @@ def test_perceive_grades_detections_against_the_simulator(tmp_path):
     correct = [d for d in record["detections"] if d["correct"]]
     # Seed 0 is solved for u_channel and chassis today; any correct pose is millimetre-accurate.
     assert {d["model"] for d in correct} >= {"u_channel", "chassis"}
-    assert all(d["add_mm"] < 5.0 and d["rot_deg"] < 3.0 for d in correct)
+    assert all(d["add_mm"] < 5.0 and d["pos_mm"] < 5.0 and d["rot_deg"] < 3.0 for d in correct)
     assert (tmp_path / "rgb.png").exists() and (tmp_path / "recognition.png").exists()
 
 
