@@ -6,4 +6,6 @@ ENV_ID = "psorr/PickPlace-v0"
 
 # Registering an id twice warns (a reload, or a second import under another name): register once.
 if ENV_ID not in gymnasium.envs.registry:
-    gymnasium.register(id=ENV_ID, entry_point="sim.env:PickPlaceEnv")
+    # The step limit is gymnasium's TimeLimit (visible in the spec, set by make's max_episode_steps), not the env's own.
+    gymnasium.register(id=ENV_ID, entry_point="sim.env:PickPlaceEnv", max_episode_steps=100,
+                       kwargs={"max_steps": None})

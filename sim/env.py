@@ -26,8 +26,9 @@ Observation (a dict; part i is the task's i-th part; world frame, metres):
 
 Reward: +1 for a grasp held through the transport, +1 for a part seated in its fixture, -0.01
 per wait, -0.1 per refused pick. ``terminated`` once every part has had its pick; ``truncated``
-after ``max_steps`` actions, once the simulated time passes ``MAX_EPISODE_S``, or when the
-workspace stays blocked (``info["gave_up"]``); the parts left are then given up in the episode.
+after ``max_steps`` actions (gymnasium's TimeLimit when made with ``gymnasium.make``), once the
+simulated time passes ``MAX_EPISODE_S``, or when the workspace stays blocked (``info["gave_up"]``); the
+parts left are then given up in the episode.
 """
 
 from __future__ import annotations
@@ -54,6 +55,7 @@ from sim.world import World, WorldConfig, build_world
 REPO_ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_TASK = "tasks/demo.yaml"
 GRASP_REWARD, PLACE_REWARD, WAIT_REWARD, REFUSED_REWARD = 1.0, 1.0, -0.01, -0.1
+DEFAULT_MAX_STEPS = 100  # actions in an episode: a few dozen suffice for four parts with the person about
 EDGE_MARGIN = 0.1  # m: a symmetric part's upright pose may stand past the table edge by up to its height
 
 
@@ -70,7 +72,10 @@ class PickPlaceEnv(gym.Env):
         poses: ``"recognized"`` (PSORR on the Kinect's cloud) or ``"oracle"`` (the simulator's true poses).
         occluder: a person reaches over the table now and then; overrides the config's ``occluder``.
         render_mode: None or ``"rgb_array"``.
-        max_steps: actions (refused ones included) after which the episode is truncated.
+        max_steps: actions (refused ones included) after which the episode is truncated and the parts
+            left are given up; None for no limit of the env's own. ``gymnasium.make`` passes None and
+            applies the registered ``max_episode_steps`` (DEFAULT_MAX_STEPS) with gymnasium's TimeLimit
+            instead, so ``gymnasium.make(..., max_episode_steps=N)`` sets the limit as for any env.
 
     Attributes:
         parts: the task's parts, in action order. world, episode: the current episode's cell and
@@ -80,14 +85,14 @@ class PickPlaceEnv(gym.Env):
     metadata = {"render_modes": ["rgb_array"], "render_fps": 1}  # a frame per step; a wait step lasts 1 s
 
     def __init__(self, task: str | os.PathLike | WorldConfig = DEFAULT_TASK, poses: str = "recognized",
-                 occluder: bool = True, render_mode: str | None = None, max_steps: int = 100):
+                 occluder: bool = True, render_mode: str | None = None, max_steps: int | None = DEFAULT_MAX_STEPS):
         if poses not in POSE_MODES:
             raise InvalidInputError(f"poses must be one of {POSE_MODES}, got {poses!r}")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise InvalidInputError(f"render_mode must be None or one of {self.metadata['render_modes']}, "
                                     f"got {render_mode!r}")
-        if isinstance(max_steps, bool) or not isinstance(max_steps, int) or max_steps < 1:
-            raise InvalidInputError(f"max_steps must be a positive int, got {max_steps!r}")
+        if max_steps is not None and (isinstance(max_steps, bool) or not isinstance(max_steps, int) or max_steps < 1):
+            raise InvalidInputError(f"max_steps must be a positive int or None, got {max_steps!r}")
         self.config = replace(_world_config(task), occluder=bool(occluder))
         self.poses, self.occluder, self.render_mode, self.max_steps = poses, bool(occluder), render_mode, max_steps
         self.parts = self.config.workpieces
@@ -153,7 +158,8 @@ class PickPlaceEnv(gym.Env):
         except WorkspaceBlockedError as exc:  # the person kept reaching in: the episode gives up, as run() does
             gave_up = str(exc)
         terminated = not episode.remaining
-        why = gave_up or (f"not picked within {self.max_steps} steps" if self._steps >= self.max_steps else "") or (
+        out_of_steps = self.max_steps is not None and self._steps >= self.max_steps
+        why = gave_up or (f"not picked within {self.max_steps} steps" if out_of_steps else "") or (
             f"not picked within {MAX_EPISODE_S:.0f} s" if self.world.data.time > MAX_EPISODE_S else "")
         truncated = bool(why) and not terminated
         if truncated:
@@ -192,7 +198,10 @@ class PickPlaceEnv(gym.Env):
     def _take_look(self) -> None:
         look = self.episode.look()
         self._looks += 1
-        self._look, self._estimates = look, {part: self.episode.estimate(look, part) for part in self.parts}
+        # Only a part still waiting has a pose to pick from: a placed one, in its fixture, is no longer pickable.
+        self._look = look
+        self._estimates = {part: self.episode.estimate(look, part) if part in self.episode.remaining else None
+                           for part in self.parts}
 
     def _refusal(self, part: str) -> str:
         """Why a pick of ``part`` now would be refused ("" if it would not)."""

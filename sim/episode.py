@@ -27,7 +27,7 @@ import numpy as np
 from psorr.errors import InvalidInputError
 from sim.cell import ArmCell, Recorder, WorkspaceBlockedError
 from sim.human import ReachingHuman
-from sim.perception import Estimate, Look, Perception
+from sim.perception import MONITOR_OCCUPIED, Estimate, Look, Perception
 from sim.pick import PickResult, fixture_error, pick_and_place, pose_error, resting_on_table
 from sim.world import World
 
@@ -115,9 +115,11 @@ class Episode:
         if self.poses == "recognized":
             look = self.perception.look(data, self.cell.holding)
         else:
-            occupied = self.cell.monitor is not None and self.perception.occupied(data, self.cell.holding)
+            watched = self.cell.monitor is not None
+            intruding = self.perception.monitor_intruding(data, self.cell.holding) if watched else 0
+            occupied = watched and intruding >= MONITOR_OCCUPIED
             truth = {} if occupied else {p: (Estimate(self.world.body_pose(p), 1.0),) for p in self.remaining}
-            look = Look(None, (), MappingProxyType(truth), 0, occupied)
+            look = Look(None, (), MappingProxyType(truth), intruding, occupied)
         self.looks += 1
         self.occupied_looks += look.occupied
         if self.recorder is not None:
@@ -152,8 +154,7 @@ class Episode:
 
     def give_up(self, why: str) -> None:
         """Record every remaining part as not picked, with ``why``."""
-        for part in self.remaining:
-            self.picks.append(PickResult(part, "", False, 0.0, False, math.nan, math.nan, math.nan, math.nan, why, 0))
+        self.picks.extend(_not_picked(part, why) for part in self.remaining)
         self.remaining = []
 
     def run(self) -> EpisodeResult:
@@ -191,10 +192,12 @@ class Episode:
         return self.result()
 
     def result(self) -> EpisodeResult:
+        """The episode so far; a part still waiting (an env episode its caller stopped) is reported not picked."""
         cell = self.cell
-        return EpisodeResult(tuple(self.picks), time.perf_counter() - self._start, float(self.world.data.time),
-                             self.looks, self.occupied_looks, cell.protective_stops, cell.stopped_s,
-                             cell.min_human_clearance * 1e3)
+        waiting = tuple(_not_picked(part, "the episode ended before its pick") for part in self.remaining)
+        return EpisodeResult(tuple(self.picks) + waiting, time.perf_counter() - self._start,
+                             float(self.world.data.time), self.looks, self.occupied_looks, cell.protective_stops,
+                             cell.stopped_s, cell.min_human_clearance * 1e3)
 
     def close(self) -> None:
         if self.perception is not None:
@@ -205,6 +208,10 @@ class Episode:
 
     def __exit__(self, *exc) -> None:
         self.close()
+
+
+def _not_picked(part: str, why: str) -> PickResult:
+    return PickResult(part, "", False, 0.0, False, math.nan, math.nan, math.nan, math.nan, why, 0)
 
 
 def run_episode(world: World, rng: np.random.Generator, poses: str = "oracle", occluder: bool = False,

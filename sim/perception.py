@@ -35,6 +35,7 @@ CEILING_MARGIN = 0.03  # m above the tallest resting part before a point counts 
 INTRUSION_FRACTION = 0.001  # of the image's pixels: fewer intruding points than this are noise
 WORKSPACE_BELOW = 0.03  # m below the table top the workspace crop starts (the table's own points stay in)
 MONITOR_CAMERA = CameraIntrinsics(width=160, height=120, fx=131.25, fy=131.25, cx=79.5, cy=59.5)
+MONITOR_OCCUPIED = INTRUSION_FRACTION * MONITOR_CAMERA.width * MONITOR_CAMERA.height  # intruding points
 """The monitor's depth stream: the Kinect's field of view at a quarter of its resolution."""
 
 
@@ -163,7 +164,11 @@ class Perception:
                 & (world_pts[:, 2] > self.world.table_top - WORKSPACE_BELOW))
 
     def occupied(self, data: mujoco.MjData, holding: str | None = None) -> bool:
-        """The monitor's verdict: is someone reaching over the table now?
+        """The monitor's verdict: is someone reaching over the table now? (See :meth:`monitor_intruding`.)"""
+        return self.monitor_intruding(data, holding) >= MONITOR_OCCUPIED
+
+    def monitor_intruding(self, data: mujoco.MjData, holding: str | None = None) -> int:
+        """How many points of the monitor's image are above the workspace, neither a part nor the robot.
 
         It reads a 160x120 depth image with the Kinect's depth noise (its standard deviation at each
         depth, as the full-resolution model gives it). The model's pixel-scale effects (lateral
@@ -178,7 +183,7 @@ class Perception:
         depth[keep] += self.rng.normal(size=int(keep.sum())) * KINECT_V1.depth_sigma(depth[keep])
         T = T_world_camera_opencv(self.world.model, data, self.world.camera_name)
         pts = (self._monitor_rays[keep] * depth[keep, None]) @ T[:3, :3].T + T[:3, 3]
-        return self._count_intruding(pts, data, holding) >= INTRUSION_FRACTION * depth.size
+        return self._count_intruding(pts, data, holding)
 
     def _count_intruding(self, world_pts: np.ndarray, data: mujoco.MjData, holding: str | None) -> int:
         inside = self._in_workspace(world_pts) & (world_pts[:, 2] > self.ceiling)

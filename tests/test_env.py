@@ -11,9 +11,9 @@ from gymnasium.utils.env_checker import check_env
 
 import sim
 from psorr.errors import InvalidInputError
-from sim.env import REFUSED_REWARD, WAIT_REWARD, PickPlaceEnv
+from sim.env import DEFAULT_MAX_STEPS, REFUSED_REWARD, WAIT_REWARD, PickPlaceEnv
 from sim.episode import Episode
-from sim.perception import Look
+from sim.perception import MONITOR_OCCUPIED, Estimate, Look
 from sim.world import WorldConfig
 
 PARTS = ("u_channel", "chassis")
@@ -165,4 +165,45 @@ def test_max_steps_truncates_and_gives_the_rest_up():
     _, _, terminated, truncated, info = env.step(WAIT)
     assert (terminated, truncated) == (False, True) and "2 steps" in info["gave_up"]
     assert [p.note for p in env.episode.result().picks] == [info["gave_up"]] * len(PARTS)
+    env.close()
+
+
+def test_a_placed_part_that_recognition_still_finds_is_not_seen(monkeypatch):
+    # Recognition finds a placed part in its fixture; it is done, so it has no pose to pick from.
+    real = Episode.look
+
+    def sees_everything(self):
+        seen = real(self)
+        every = {p: (Estimate(self.world.body_pose(p), 0.8),) for p in PARTS}
+        return Look(seen.frame, seen.detections, MappingProxyType(every), seen.intruding, seen.occupied)
+
+    monkeypatch.setattr(Episode, "look", sees_everything)
+    env = make()
+    env.reset(seed=SEED)
+    obs, *_, info = env.step(0)
+    assert obs["done"].tolist() == [1, 0] and obs["seen"].tolist() == [0, 1]
+    assert obs["scores"][0] == 0 and not obs["poses"][0].any() and info["action_mask"].tolist() == [0, 1, 1]
+    env.close()
+
+
+def test_make_sets_the_step_limit_as_for_any_gymnasium_env():
+    assert gymnasium.spec("psorr/PickPlace-v0").max_episode_steps == DEFAULT_MAX_STEPS
+    env = gymnasium.make("psorr/PickPlace-v0", task=CONFIG, poses="oracle", occluder=False, max_episode_steps=2)
+    assert env.unwrapped.max_steps is None  # the TimeLimit counts, so that max_episode_steps is obeyed
+    env.reset(seed=SEED)
+    assert env.step(WAIT)[3] is False
+    assert env.step(WAIT)[3] is True
+    assert [p.note for p in env.unwrapped.episode.result().picks] == ["the episode ended before its pick"] * 2
+    env.close()
+
+
+def test_an_oracle_look_reports_the_monitor_count_that_made_it_occupied():
+    env = make(task=WorldConfig(workpieces=PARTS, occluder=True), occluder=True)
+    _, info = env.reset(seed=0)
+    occupied = []
+    for _ in range(12):
+        obs, *_, info = env.step(WAIT)
+        occupied.append(bool(obs["occupied"][0]))
+        assert (info["intruding"] >= MONITOR_OCCUPIED) == occupied[-1]
+    assert any(occupied) and not all(occupied)  # the person reached in, and withdrew, within these looks
     env.close()
