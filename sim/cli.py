@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from psorr.cli import at_least_one, run_parsed, seed
+from psorr.cli import at_least_one, check_output, run_parsed, seed
 
 
 def _log(message: str) -> None:
@@ -43,6 +43,7 @@ def _perceive(args) -> int:
     from sim.sensor import DepthCamera
     from sim.world import WorldConfig, build_world
 
+    check_output(args.out, "--out")
     rng = np.random.default_rng(args.seed)
     config = WorldConfig(workpieces=tuple(args.parts)) if args.parts else WorldConfig()
     world = build_world(config, rng)

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from psorr.errors import CloudFileError
+from psorr.errors import CloudFileError, InvalidInputError
 from sim.world import WorldConfig
 
 TASK_KEYS = ("workpieces", "camera_height", "camera_tilt_deg")
@@ -29,7 +29,9 @@ def load_task(path) -> Task:
     if not path.is_file():
         raise CloudFileError(path, "no such task file", "see tasks/demo.yaml for the format")
     try:
-        spec = yaml.safe_load(path.read_text())
+        spec = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except UnicodeDecodeError:
+        raise CloudFileError(path, "not UTF-8 text", "save the task file as UTF-8 YAML") from None
     except yaml.YAMLError as exc:
         raise CloudFileError(path, f"not valid YAML ({exc.__class__.__name__})", "fix the syntax") from None
     if not isinstance(spec, dict):
@@ -45,5 +47,15 @@ def load_task(path) -> Task:
     missing = sorted(set(parts) - set(catalog))
     if missing:
         raise CloudFileError(path, f"unknown workpieces {missing}", f"choose from {', '.join(sorted(catalog))}")
-    options = {key: float(spec[key]) for key in ("camera_height", "camera_tilt_deg") if key in spec}
-    return Task(path, WorldConfig(workpieces=tuple(parts), **options))
+    options = {}
+    for key in ("camera_height", "camera_tilt_deg"):
+        if key in spec:
+            value = spec[key]
+            # YAML reads `true` as a bool, which float() would take for 1.0.
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                raise CloudFileError(path, f"{key} must be a number, got {value!r}", "see tasks/demo.yaml")
+            options[key] = float(value)
+    try:
+        return Task(path, WorldConfig(workpieces=tuple(parts), **options))
+    except InvalidInputError as exc:  # a value out of range, or a part listed twice: this file's fault
+        raise CloudFileError(path, str(exc)) from None

@@ -36,20 +36,25 @@ def test_run_prints_the_summary_contract(tmp_path):
 
 
 def test_bad_task_files_name_the_file_and_the_fix(tmp_path):
-    cases = {"bad.yaml": "workpieces: [gearbox]\n", "keys.yaml": "workpieces: [chassis]\nspeed: 3\n",
-             "broken.yaml": "workpieces: [chassis\n"}
+    cases = {"bad.yaml": b"workpieces: [gearbox]\n", "keys.yaml": b"workpieces: [chassis]\nspeed: 3\n",
+             "broken.yaml": b"workpieces: [chassis\n", "word.yaml": b"workpieces: [chassis]\ncamera_height: high\n",
+             "bool.yaml": b"workpieces: [chassis]\ncamera_height: true\n",
+             "list.yaml": b"workpieces: [chassis]\ncamera_tilt_deg: [30]\n",
+             "range.yaml": b"workpieces: [chassis]\ncamera_height: 5.0\n",
+             "twice.yaml": b"workpieces: [chassis, chassis]\n",
+             "latin1.yaml": b"workpieces: [\xe9]\n"}
     for name, text in cases.items():
-        (tmp_path / name).write_text(text)
+        (tmp_path / name).write_bytes(text)
         out = subprocess.run([sys.executable, "-m", "sim.cli", "run", str(tmp_path / name)],
                              capture_output=True, text=True, timeout=120)
         assert out.returncode == 2 and name in out.stderr and "Traceback" not in out.stderr, out.stderr
 
 
 def test_run_wants_at_least_one_episode():
-    for count in ("0", "-2", "two"):
+    for count in ("0", "-2", "two", "99999999999999999999"):
         out = subprocess.run([sys.executable, "-m", "sim.cli", "run", "tasks/demo.yaml", "--episodes", count],
                              capture_output=True, text=True, timeout=120)
-        assert out.returncode == 2 and "--episodes" in out.stderr and "at least 1" in out.stderr, out.stderr
+        assert out.returncode == 2 and "--episodes" in out.stderr and "from 1 to" in out.stderr, out.stderr
         assert "Traceback" not in out.stderr
 
 
