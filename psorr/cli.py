@@ -5,16 +5,43 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
 
 from psorr.errors import CloudFileError, InvalidInputError, PsorrError
-from psorr.types import require_sensor_metres
-
+from psorr.types import require_seen_from_origin, require_sensor_metres
 
 # DecomposeParams.voxel_size, which a test holds this to: importing the pipeline for --help costs a second.
 DEFAULT_VOXEL_SIZE = 0.012
+
+
+def check_output(path: str | None, what: str, suffix: str | None = None) -> Path | None:
+    """``path`` as a Path, once it is known that it can be written: before the work, not after it.
+
+    ``suffix`` (".png", ".npy") is required as given, since the writers would otherwise change the name or
+    fail on the format; without one, ``path`` is a folder. The nearest existing folder on the way must take
+    a new file (tried with a temporary one), so that missing folders can be made.
+    """
+    if path is None:
+        return None
+    out = Path(path)
+    if suffix is not None and (out.suffix.lower() != suffix or out.is_dir()):
+        raise PsorrError(f"{what} {path}: must be a {suffix} file name (it is written as {suffix})")
+    if suffix is None and out.exists() and not out.is_dir():
+        raise PsorrError(f"{what} {path}: is a file; give a folder to write into")
+    base = out if suffix is None else out.parent
+    while not base.exists() and base != base.parent:
+        base = base.parent
+    try:
+        if not base.is_dir():
+            raise NotADirectoryError(f"{base} is not a folder")
+        with tempfile.TemporaryFile(dir=base):
+            pass
+    except OSError as exc:
+        raise PsorrError(f"{what} {path}: cannot write there ({exc.strerror or exc}); choose another place") from None
+    return out
 
 
 def _log(message: str) -> None:
@@ -25,6 +52,8 @@ def _decompose(args) -> int:
     from psorr.decomposition import DecomposeParams, decompose
     from psorr.io import read_cloud
 
+    check_output(args.out, "--out", ".npy")
+    check_output(args.png, "--png", ".png")
     cloud = read_cloud(args.cloud)
     require_sensor_metres(cloud, str(args.cloud))
     _log(f"read {args.cloud}: {len(cloud)} points, {int(cloud.valid_mask.sum())} finite")
@@ -80,9 +109,11 @@ def _recognize(args) -> int:
     from psorr.recognize import Recognizer
     from psorr.recognize_params import RecognizeParams
 
-    # The scene first: a wrong path should not wait for a new library to train.
+    # The outputs and the scene first: a wrong path should not wait for a new library to train.
+    check_output(args.png, "--png", ".png")
     cloud = read_cloud(args.scene)
     require_sensor_metres(cloud, str(args.scene))
+    require_seen_from_origin(cloud, str(args.scene))
     library = library_from_arguments(args.models, units=args.units,
                                      progress=lambda xs: tqdm(xs, desc="training", file=sys.stderr))
     _log(f"read {args.scene}: {len(cloud)} points; models {', '.join(library.names)}")
@@ -120,7 +151,8 @@ def build_parser() -> argparse.ArgumentParser:
     dec.add_argument("--out", metavar="LABELS.npy", help="write one int64 primitive index per input point (-1: none)")
     dec.add_argument("--json", action="store_true", help="print one JSON line instead of a table")
     dec.add_argument("--png", metavar="PICTURE.png", help="render the cloud coloured by primitive")
-    dec.add_argument("--voxel-size", type=float, default=None, help=f"working resolution in metres (default {DEFAULT_VOXEL_SIZE})")
+    dec.add_argument("--voxel-size", type=float, default=None,
+                     help=f"working resolution in metres (default {DEFAULT_VOXEL_SIZE})")
     dec.add_argument("--seed", type=seed, default=0, help="seed of the RANSAC sampling (default 0)")
     dec.set_defaults(run=_decompose)
     rec = sub.add_parser("recognize", help="find CAD-trained workpieces and their poses in a depth cloud")
@@ -142,13 +174,14 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _whole_number(text: str, least: int, what: str) -> int:
+def _whole_number(text: str, least: int, what: str, most: int | None = None) -> int:
     try:
         n = int(text)
     except ValueError:
         n = least - 1
-    if n < least:
-        raise argparse.ArgumentTypeError(f"expected {what}, a whole number of at least {least}, got {text!r}")
+    if n < least or (most is not None and n > most):
+        span = f"of at least {least}" if most is None else f"from {least} to {most}"
+        raise argparse.ArgumentTypeError(f"expected {what}, a whole number {span}, got {text!r}")
     return n
 
 
@@ -158,8 +191,8 @@ def seed(text: str) -> int:
 
 
 def at_least_one(text: str) -> int:
-    """An argparse type: a count of at least 1."""
-    return _whole_number(text, 1, "a count")
+    """An argparse type: a count of at least 1 (and at most a billion: progress bars take no more)."""
+    return _whole_number(text, 1, "a count", most=10**9)
 
 
 def run_parsed(parser: argparse.ArgumentParser, argv: list[str] | None) -> int:

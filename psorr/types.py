@@ -31,6 +31,20 @@ def _frozen_array(value, name: str, dtype, shape_tail: tuple[int, ...], n: int |
     return array
 
 
+def _integer_labels(value, n: int) -> np.ndarray:
+    """``value`` as read-only (N,) int64 labels, refusing values that int64 would change (0.5, 2**64 - 1)."""
+    try:
+        raw = np.asarray(value)
+    except (TypeError, ValueError) as exc:
+        raise InvalidInputError(f"labels must be convertible to an int64 array: {exc}") from None
+    if raw.dtype.kind in "fu" and raw.size:
+        whole = raw.dtype.kind == "u" or bool((np.isfinite(raw) & (raw == np.round(raw))).all())
+        if not whole or raw.max() > np.iinfo(np.int64).max:
+            raise InvalidInputError("labels must be whole numbers that fit int64 (-1 for none), got non-integral, "
+                                    "non-finite or too large values")
+    return _frozen_array(raw, "labels", np.int64, (), n)
+
+
 @dataclass(frozen=True, eq=False)
 class PointCloud:
     """A cloud of N points, optionally organised as a height x width image.
@@ -65,9 +79,14 @@ class PointCloud:
                 raise InvalidInputError("colors must be RGB floats in [0, 1]; divide 8-bit colours by 255")
             object.__setattr__(self, "colors", colors)
         if self.labels is not None:
-            object.__setattr__(self, "labels", _frozen_array(self.labels, "labels", np.int64, (), n))
+            object.__setattr__(self, "labels", _integer_labels(self.labels, n))
         if (self.width is None) != (self.height is None):
             raise InvalidInputError("give both width and height for an organised cloud, or neither")
+        for name in ("width", "height"):
+            size = getattr(self, name)
+            if size is not None and (isinstance(size, bool) or not isinstance(size, (int, np.integer)) or size < 1):
+                raise InvalidInputError(f"PointCloud.{name} must be a whole number >= 1 (or None for an "
+                                        f"unorganised cloud), got {size!r}")
         if self.width is not None and self.width * self.height != n:
             raise InvalidInputError(
                 f"an organised cloud of {self.width}x{self.height} needs {self.width * self.height} points, got {n}"
@@ -234,14 +253,21 @@ def random_generator(rng, caller: str) -> np.random.Generator:
 
 
 SENSOR_RANGE_LIMIT = 25.0  # m: beyond any Kinect-class sensor's reach (about 10 m)
+MAX_VIEW_SLOPE = 4.0  # |x| / z or |y| / z: a 152 degree view, wider than depth sensors' (a Kinect's is 57 x 43)
+
+
+def _finite_sample(cloud: PointCloud, size: int = 20000) -> np.ndarray:
+    """At most about ``size`` of the cloud's finite points, evenly spread: a stride over every row could land
+    on NaN rows only (an organised cloud's invalid pixels recur with the row length)."""
+    finite = cloud.points[cloud.valid_mask]
+    return finite[:: max(1, len(finite) // size)]
 
 
 def require_sensor_metres(cloud: PointCloud, what: str) -> None:
     """Refuse a cloud that is evidently not in metres about the sensor: the median distance of its
-    points (the finite ones among every 97th) from the origin beyond SENSOR_RANGE_LIMIT, as a Kinect cloud in
-    millimetres (about 800) is. ``what`` names the cloud in the message (a file, or "the cloud")."""
-    sample = cloud.points[::97]
-    sample = sample[np.isfinite(sample).all(axis=1)]
+    finite points from the origin beyond SENSOR_RANGE_LIMIT, as a Kinect cloud in millimetres (about 800)
+    is. ``what`` names the cloud in the message (a file, or "the cloud")."""
+    sample = _finite_sample(cloud)
     if len(sample) == 0:
         return
     median = float(np.median(np.linalg.norm(sample, axis=1)))
@@ -250,6 +276,27 @@ def require_sensor_metres(cloud: PointCloud, what: str) -> None:
             f"{what}: its points lie a median {median:.4g} units from the sensor, beyond any depth sensor's "
             f"{SENSOR_RANGE_LIMIT:.0f} m; psorr takes clouds in metres in the sensor's frame (a cloud in "
             "millimetres: scale it by 0.001; one in a world frame: move it into the camera's)")
+
+
+def require_seen_from_origin(cloud: PointCloud, what: str) -> None:
+    """Refuse a cloud that no sensor at the origin looking along +z (OpenCV axes) could have measured:
+    finite points at z <= 0, or a spread of directions wider than MAX_VIEW_SLOPE. Recognition renders the
+    cloud as a depth image from the origin; a world-frame cloud (a table at z = 0) would make that image
+    terabytes wide, and points behind the sensor would be lost from it. ``what`` names the cloud."""
+    finite = cloud.points[cloud.valid_mask]
+    behind = int(np.count_nonzero(finite[:, 2] <= 0))
+    fix = ("psorr takes clouds in the sensor's frame, OpenCV axes: x right, y down, z forward from the sensor; "
+           "one in a world frame: move it into the camera's; one with z towards the sensor: negate y and z")
+    if behind:
+        raise InvalidInputError(f"{what}: {behind} of its {len(finite)} finite points lie at z <= 0, behind the "
+                                f"sensor; {fix}")
+    sample = _finite_sample(cloud)
+    if len(sample):
+        slope = float(np.percentile(np.abs(sample[:, :2]).max(axis=1) / sample[:, 2], 99))
+        if slope > MAX_VIEW_SLOPE:
+            angle = 2 * np.degrees(np.arctan(slope))
+            raise InvalidInputError(f"{what}: its points spread over a {angle:.0f} degree view from the origin, "
+                                    f"wider than any depth sensor's; {fix}")
 
 
 def _rigid_pose(value, name: str) -> np.ndarray:

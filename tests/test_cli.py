@@ -111,3 +111,29 @@ def test_stacked_reports_a_block_flush_with_a_larger_one_that_the_default_takes_
         assert out.returncode == 0, out.stderr
         found[flags] = json.loads(out.stdout)["detections"]
     assert found[()] == [] and [d["model"] for d in found[("--stacked",)]] == ["small"]
+
+
+def test_outputs_that_cannot_be_written_are_refused_before_any_work(tmp_path):
+    scene = synthetic.box_on_table(np.random.default_rng(0))
+    path = tmp_path / "scene.npy"
+    np.save(path, scene.cloud.points)
+    cases = [(("decompose", str(path), "--out", str(tmp_path / "labels.bin")), "must be a .npy file name"),
+             (("decompose", str(path), "--png", str(tmp_path)), "must be a .png file name"),
+             (("decompose", str(path), "--png", "/proc/no/x.png"), "cannot write there"),
+             (("recognize", str(tmp_path / "never_read.stl"), str(path), "--png", "/proc/x.png"), "cannot write there")]
+    for args, why in cases:
+        out = _run(*args)
+        assert out.returncode == 2 and why in out.stderr and "Traceback" not in out.stderr, out.stderr
+        assert "read " not in out.stderr and "training" not in out.stderr  # refused before reading or training
+    assert not (tmp_path / "labels.bin.npy").exists()
+
+
+def test_recognize_refuses_a_cloud_no_sensor_at_the_origin_could_see(tmp_path):
+    points = synthetic.box_on_table(np.random.default_rng(0)).cloud.points
+    world = points - [0.0, 0.0, np.nanmedian(points[:, 2])]  # a table about z = 0, as in a world frame
+    flipped = points * [1.0, -1.0, -1.0]  # z towards the sensor
+    for name, cloud in (("world.npy", world), ("flipped.npy", flipped)):
+        np.save(tmp_path / name, cloud)
+        out = _run("recognize", str(tmp_path / "never_read.stl"), str(tmp_path / name), "--json")
+        assert out.returncode == 2 and out.stdout == "" and "Traceback" not in out.stderr
+        assert name in out.stderr and "behind the sensor" in out.stderr and "sensor's frame" in out.stderr

@@ -1,0 +1,41 @@
+"""PointCloud's own checks, and the sensor-frame checks recognition makes of a cloud."""
+
+import numpy as np
+import pytest
+
+from psorr.errors import InvalidInputError
+from psorr.types import PointCloud, require_seen_from_origin, require_sensor_metres
+
+FRONT = np.column_stack([np.linspace(-0.3, 0.3, 12), np.zeros(12), np.full(12, 1.0)])
+
+
+@pytest.mark.parametrize("width, height", [(-6, -2), (0, 0), (6.0, 2), (True, 12)])
+def test_an_organised_size_must_be_whole_numbers_of_at_least_one(width, height):
+    with pytest.raises(InvalidInputError, match="PointCloud.width"):
+        PointCloud(FRONT, width=width, height=height)
+
+
+def test_labels_that_int64_would_change_are_refused():
+    for labels in ([0.5] * 12, [np.nan] * 12, np.full(12, 2**64 - 1, np.uint64)):
+        with pytest.raises(InvalidInputError, match="labels must be whole numbers"):
+            PointCloud(FRONT, labels=labels)
+    kept = PointCloud(FRONT, labels=np.arange(12, dtype=float) - 1).labels
+    assert kept.dtype == np.int64 and kept.tolist() == list(range(-1, 11))
+
+
+def test_the_millimetre_check_sees_past_nan_rows_that_recur_with_the_stride():
+    points = FRONT.repeat(100, axis=0) * 1000.0
+    points[::97] = np.nan  # an organised cloud's invalid pixels can fall on every sampled row
+    with pytest.raises(InvalidInputError, match="millimetres"):
+        require_sensor_metres(PointCloud(points), "scene.npy")
+
+
+def test_points_behind_the_sensor_or_too_wide_a_view_are_refused():
+    require_seen_from_origin(PointCloud(FRONT), "ok")
+    behind = FRONT.copy()
+    behind[3, 2] = -0.2
+    with pytest.raises(InvalidInputError, match="1 of its 12 finite points lie at z <= 0"):
+        require_seen_from_origin(PointCloud(behind), "scene.npy")
+    grazing = FRONT * [1.0, 1.0, 0.01]  # 30 cm wide at 1 cm: a world-frame table seen edge-on
+    with pytest.raises(InvalidInputError, match="wider than any depth sensor's"):
+        require_seen_from_origin(PointCloud(grazing), "scene.npy")
