@@ -39,6 +39,7 @@ CLOUD_SUFFIXES = (".pcd", ".ply", ".xyz", ".txt", ".npy")
 MESH_SUFFIXES = (".stl", ".obj", ".ply")
 
 _NORMALS = ("nx", "ny", "nz")
+_UNIT_TOLERANCE = 0.01  # loose enough for normals printed with 3 digits, far tighter than colours
 
 
 def _suffix(path: Path, allowed: tuple[str, ...], what: str) -> str:
@@ -81,10 +82,14 @@ def read_cloud(path) -> PointCloud:
     .xyz/.txt: whitespace-separated ``x y z`` or ``x y z nx ny nz`` rows, ``#`` comments.
     .npy: (N, 3), (N, 6) (xyz + normals), (H, W, 3) or (H, W, 6) numeric array.
     .ply: vertex x/y/z, optional nx/ny/nz, red/green/blue and label properties.
+    In .xyz/.txt/.npy the 6-column form must hold unit normals (finite rows).
 
     Raises:
         CloudFileError: unknown suffix, missing/empty/malformed/truncated file,
-            zero points or every point NaN.
+            more data than the header declares, zero points, every point NaN,
+            columns 4-6 that are not unit normals, partial normals, non-integer
+            labels or labels beyond int64, a PCD VIEWPOINT other than the identity,
+            or a PLY mesh (faces).
     """
     path = Path(path)
     suffix = _suffix(path, CLOUD_SUFFIXES, "point-cloud")
@@ -100,8 +105,26 @@ def read_cloud(path) -> PointCloud:
 
 def _columns_to_cloud(path: Path, columns: np.ndarray, width=None, height=None) -> PointCloud:
     """(N, 3) xyz or (N, 6) xyz + normals -> a checked PointCloud."""
+    if columns.shape[1] == 6:
+        _check_unit_normals(path, columns[:, 3:])
     names = ("x", "y", "z", *_NORMALS)[: columns.shape[1]]
     return cloud_from_fields(path, dict(zip(names, columns.T, strict=True)), width, height)
+
+
+def _check_unit_normals(path: Path, normals: np.ndarray) -> None:
+    """Refuse columns 4-6 unless every finite row is a unit vector.
+
+    Unnamed columns carry no meaning of their own, and x y z r g b is as common as
+    x y z nx ny nz; colours taken as normals would silently spoil recognition.
+    """
+    norms = np.linalg.norm(normals[np.isfinite(normals).all(axis=1)], axis=1)
+    off = np.abs(norms - 1.0) > _UNIT_TOLERANCE
+    if off.any():
+        raise CloudFileError(
+            path, f"columns 4-6 are not unit normals: {off.sum()} of {len(norms)} rows have a "
+            f"norm outside 1 +- {_UNIT_TOLERANCE} (median norm {np.median(norms):.3g})",
+            "columns 4-6 must be unit normals nx ny nz; for colours, use .ply or .pcd with "
+            "named fields, or keep only x y z")
 
 
 def _decode_xyz(path: Path, data: bytes) -> PointCloud:

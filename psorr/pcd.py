@@ -31,6 +31,7 @@ _PCD_DTYPES = {
 _PCD_KEYS = {"VERSION", "FIELDS", "COLUMNS", "SIZE", "TYPE", "COUNT", "WIDTH", "HEIGHT",
              "VIEWPOINT", "POINTS", "DATA"}  # fmt: skip
 _PCD_DATA_KINDS = ("ascii", "binary", "binary_compressed")
+_IDENTITY_POSE = np.array([0, 0, 0, 1, 0, 0, 0], dtype=float)
 _MAX_HEADER_LINES = 64  # a real header has ~11 lines; stop early on binary junk
 # ------------------------------------------------------------------------------ PCD
 
@@ -103,16 +104,43 @@ def _pcd_fields(path, header: dict) -> list[Field]:
     return fields
 
 
+def _check_viewpoint(path, header: dict) -> None:
+    """Refuse a VIEWPOINT (tx ty tz qw qx qy qz) other than the identity.
+
+    psorr takes points to be in the sensor frame: ignoring the pose would misplace every
+    point without a word, and applying it would return coordinates that are not the
+    file's, so the user converts the file once instead.
+    """
+    values = header.get("VIEWPOINT")
+    if values is None:  # optional: PCL's default is the identity
+        return
+    try:
+        pose = np.array([float(v) for v in values])
+    except ValueError:
+        pose = np.empty(0)
+    if pose.shape != (7,):
+        raise CloudFileError(path, f"malformed PCD header: VIEWPOINT must be 7 numbers, got "
+                             f"{' '.join(values) or 'nothing'}", REEXPORT)
+    # q and -q are the same rotation.
+    if not (np.allclose(pose, _IDENTITY_POSE, rtol=0, atol=1e-6)
+            or np.allclose(pose * [1, 1, 1, -1, -1, -1, -1], _IDENTITY_POSE, rtol=0, atol=1e-6)):
+        raise CloudFileError(path, f"VIEWPOINT {' '.join(values)} is not the identity, so the "
+                             "points are not in the sensor frame", "the points must be in the "
+                             "sensor frame: transform them by the viewpoint's inverse and write "
+                             "VIEWPOINT 0 0 0 1 0 0 0")
+
+
 def decode_pcd(path, data: bytes) -> PointCloud:
     """The bytes of a PCD v0.7 file (ascii, binary or binary_compressed) -> a PointCloud.
 
     ``path`` only names the file in errors. x/y/z are metres (as stored); ``label``
     -> labels, ``rgb``/``rgba`` -> colors, ``normal_*`` -> normals. HEIGHT > 1 gives
-    an organised cloud whose NaN pixels keep their rows. VIEWPOINT is not applied.
-    Other fields are ignored.
+    an organised cloud whose NaN pixels keep their rows. A VIEWPOINT other than the
+    identity is refused. Other fields are ignored.
     """
     header, offset = _parse_pcd_header(path, data)
     fields = _pcd_fields(path, header)
+    _check_viewpoint(path, header)
     width = _header_int(path, header, "WIDTH")
     height = _header_int(path, header, "HEIGHT", default=1)
     n = _header_int(path, header, "POINTS", default=width * height)
@@ -127,7 +155,7 @@ def decode_pcd(path, data: bytes) -> PointCloud:
             raise CloudFileError(path, "DATA ascii holds non-text bytes", REEXPORT) from None
         columns = decode_ascii(path, text, fields, n)
     elif kind == "binary":
-        columns = decode_binary(path, data, offset, fields, n)
+        columns = decode_binary(path, data, offset, fields, n, after=0)
     elif kind == "binary_compressed":
         columns = _decode_compressed(path, data, offset, fields, n)
     else:

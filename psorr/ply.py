@@ -2,6 +2,7 @@
 
 Reads ascii, binary_little_endian and binary_big_endian files: vertex x/y/z, optional
 nx/ny/nz, red/green/blue and label properties; elements before the vertices are skipped.
+A mesh (a face element holding faces) is refused: read it with psorr.io.read_mesh.
 Writes float64 points and normals, 8-bit colours and int32 labels. The record decoders
 and the fields -> PointCloud mapping are shared with the PCD codec, in :mod:`psorr.records`.
 
@@ -27,6 +28,7 @@ _PLY_TYPES = {
 _PLY_ENDIAN = {"ascii": "<", "binary_little_endian": "<", "binary_big_endian": ">"}
 _PLY_MAX_HEADER = 1 << 16  # bytes; a header longer than this is not a PLY header
 _NORMALS = ("nx", "ny", "nz")
+_FACE_ELEMENTS = ("face", "tristrips")  # the elements that make a PLY a surface
 _BAD_PLY = "re-export the file, or check it was copied completely"
 
 
@@ -66,37 +68,65 @@ def _parse_ply_header(path: Path, data: bytes):
     return fmt, elements, newline + 1
 
 
+def _row_bytes(properties) -> int:
+    """Bytes of one binary row of scalar properties."""
+    return sum(np.dtype(code).itemsize for _, code in properties)
+
+
 def decode_ply(path: Path, data: bytes) -> PointCloud:
     """The bytes of a PLY file (ascii or binary, either endianness) -> a PointCloud of its
-    vertex element. ``path`` only names the file in errors."""
+    vertex element. ``path`` only names the file in errors; a mesh (faces) is refused."""
     fmt, elements, offset = _parse_ply_header(path, data)
+    faces = sum(count for name, count, _ in elements if name in _FACE_ELEMENTS)
+    if faces:
+        # Its vertices alone are not a scan of the surface: corners only, no density.
+        raise CloudFileError(path, f"it is a mesh ({faces} faces), not a point cloud",
+                             "pass it as a model, or sample it to a cloud")
+    index = next((i for i, (name, _, _) in enumerate(elements) if name == "vertex"), None)
+    if index is None:
+        raise CloudFileError(path, "no vertex element", "export the cloud's vertices")
     endian, skip_rows = _PLY_ENDIAN[fmt], 0
-    for name, count, properties in elements:
-        has_list = any(code is None for _, code in properties)
-        if name == "vertex":
-            break
-        if has_list and fmt != "ascii":
+    for name, count, properties in elements[:index]:
+        if any(code is None for _, code in properties) and fmt != "ascii":
             # Skipping variable-length rows needs a per-row walk; no exporter we know of
             # puts them before the vertices, so refuse rather than guess.
             raise CloudFileError(path, f"the {name!r} element with list properties comes "
                                  "before the vertices", "re-export with vertices first")
-        offset += count * sum(np.dtype(code).itemsize for _, code in properties)
+        offset += count * _row_bytes(properties)
         skip_rows += count
-    else:
-        raise CloudFileError(path, "no vertex element", "export the cloud's vertices")
-    if has_list:
+    _, count, properties = elements[index]
+    if any(code is None for _, code in properties):
         raise CloudFileError(path, "the vertex element has list properties",
                              "re-export with scalar vertex properties only")
+    names = [p for p, _ in properties]
+    repeated = sorted({p for p in names if names.count(p) > 1})
+    if repeated:
+        raise CloudFileError(path, f"malformed PLY header: repeated vertex property "
+                             f"{' '.join(repeated)}", "give each property its own name; " + _BAD_PLY)
     fields = [Field(p, np.dtype(endian + code)) for p, code in properties]
+    later = [(n, props) for _, n, props in elements[index + 1:] if n]
     if fmt == "ascii":
         try:
             text = data[offset:].decode("ascii")
         except UnicodeDecodeError:
             raise CloudFileError(path, "ascii PLY data holds non-text bytes", _BAD_PLY) from None
-        columns = decode_ascii(path, text, fields, count, skip_rows=skip_rows, exact=False)
+        columns = decode_ascii(path, text, fields, count, skip_rows=skip_rows, exact=not later)
+        if later:
+            _check_ascii_rows(path, text, skip_rows + count + sum(n for n, _ in later))
     else:
-        columns = decode_binary(path, data, offset, fields, count)
+        # Rows after the vertices have a known size unless they hold lists.
+        lists = any(code is None for _, props in later for _, code in props)
+        after = None if lists else sum(n * _row_bytes(props) for n, props in later)
+        columns = decode_binary(path, data, offset, fields, count, after=after)
     return cloud_from_fields(path, columns)
+
+
+def _check_ascii_rows(path: Path, text: str, expected: int) -> None:
+    """Refuse ascii data whose row count differs from the header's elements in total."""
+    rows = sum(1 for line in text.splitlines() if line.split("#", 1)[0].strip())
+    if rows != expected:
+        raise CloudFileError(path, f"the header declares {expected} rows of elements but the "
+                             f"data holds {rows}", _BAD_PLY)
 
 
 def encode_ply(cloud: PointCloud, binary: bool) -> bytes:

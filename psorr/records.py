@@ -22,6 +22,7 @@ NORMAL_NAMES = (("normal_x", "normal_y", "normal_z"), ("nx", "ny", "nz"))
 _RGB_NAMES = ("red", "green", "blue")
 _KNOWN_FIELDS = {"x", "y", "z", "label", *_PACKED_COLOURS, *_RGB_NAMES, *sum(NORMAL_NAMES, ())}
 REEXPORT = "re-export the file, or check it was copied completely"
+LABEL_FIX = "labels must be whole numbers that fit int64, -1 for no label"
 
 
 
@@ -37,14 +38,28 @@ class Field:
 # --------------------------------------------------------------------------- records
 
 
-def decode_binary(path, buffer, offset: int, fields: list[Field], n: int) -> dict:
-    """Packed records (no padding) starting at ``offset`` -> {name: (n,) or (n, count)}."""
+def decode_binary(path, buffer, offset: int, fields: list[Field], n: int, *,
+                  after: int | None = 0) -> dict:
+    """Packed records (no padding) starting at ``offset`` -> {name: (n,) or (n, count)}.
+
+    Exactly ``after`` bytes must follow the records (None: unknown, e.g. PLY list rows),
+    so that points beyond the header's count are refused rather than dropped.
+    """
     itemsize = sum(f.dtype.itemsize * f.count for f in fields)
     available = len(buffer) - offset
     if available < n * itemsize:
         raise CloudFileError(
             path, f"truncated data: {n} points need {n * itemsize} bytes, found {available}",
             REEXPORT)
+    extra = None if after is None else available - n * itemsize - after
+    if extra is not None and extra < 0:
+        raise CloudFileError(path, f"truncated data: {-extra} bytes missing after the {n} "
+                             "points", REEXPORT)
+    if extra:
+        raise CloudFileError(
+            path, f"the header declares {n} points but {extra} more bytes of data follow them "
+            f"({extra / itemsize:g} points' worth)",
+            "make the header's point count match the data, or re-export the file")
     # Padding fields ("_" in PCD) may repeat, so give every column a unique key.
     keys = [f"f{i}" for i in range(len(fields))]
     offsets = np.cumsum([0] + [f.dtype.itemsize * f.count for f in fields[:-1]]).tolist()
@@ -76,7 +91,8 @@ def decode_ascii(path, text: str, fields: list[Field], n: int, *, skip_rows: int
     """Whitespace-separated rows (``#`` comments) -> {name: array}.
 
     With ``exact`` the text must hold exactly ``n`` rows (PCD); otherwise only the
-    first ``n`` rows after ``skip_rows`` are read (PLY, where faces may follow).
+    first ``n`` rows after ``skip_rows`` are read (PLY, where rows of further elements
+    may follow; the caller checks those).
     """
     width = sum(f.count for f in fields)
     table = np.empty((0, width))
@@ -100,12 +116,26 @@ def decode_ascii(path, text: str, fields: list[Field], n: int, *, skip_rows: int
             out[f.name] = column  # keep float64 text values: see _unpack_colours
         elif f.dtype.kind == "f":
             out[f.name] = column.astype(f.dtype)  # round as binary data would be
-        elif np.all(np.isfinite(column)) and np.all(column == np.rint(column)):
-            out[f.name] = column.astype(f.dtype)
         else:
-            raise CloudFileError(path, f"integer field {f.name!r} holds non-integer values",
-                                 REEXPORT)
+            out[f.name] = _integer_column(path, f, column)
     return out
+
+
+def _integer_column(path, field: Field, column: np.ndarray) -> np.ndarray:
+    """Float64 text values -> ``field.dtype``, refusing any the cast would change."""
+    if not (np.all(np.isfinite(column)) and np.all(column == np.rint(column))):
+        raise CloudFileError(path, f"integer field {field.name!r} holds non-integer values",
+                             REEXPORT)
+    if field.name == "label" and len(column) and np.abs(column).max() > 2**53:
+        # Text is parsed as float64, which rounds integers beyond 2**53 (2**64 - 1 -> 2**64).
+        raise CloudFileError(path, f"the label field holds values as large as {np.abs(column).max():.3g}"
+                             ", beyond the 2^53 that ascii data can carry exactly", LABEL_FIX)
+    info = np.iinfo(field.dtype)
+    # info.min and info.max + 1 are powers of two, so exact as float64.
+    if len(column) and (column.min() < info.min or column.max() >= float(info.max + 1)):
+        raise CloudFileError(path, f"integer field {field.name!r} holds values outside the "
+                             f"{field.dtype.name} range {info.min}..{info.max}", REEXPORT)
+    return column.astype(field.dtype)
 
 
 def encode_records(fields: list[Field], columns: list[np.ndarray], *, ascii: bool) -> bytes:
@@ -147,13 +177,30 @@ def _unpack_colours(path, packed: np.ndarray) -> np.ndarray:
     return rgb
 
 
+def _int64_labels(path, labels: np.ndarray) -> np.ndarray:
+    """A label column -> int64, refusing values the cast would change (0.5, 2**64 - 1)."""
+    if labels.dtype.kind == "f":
+        fractional = ~(labels == np.rint(labels))  # also true for NaN
+        if fractional.any():
+            raise CloudFileError(path, f"the label field holds {fractional.sum()} non-integer "
+                                 f"values (first: {labels[fractional][0]:g})", LABEL_FIX)
+    # int64 holds [-2**63, 2**63); floats that large and uint64 above it would wrap.
+    if labels.dtype.kind in "fu" and len(labels):
+        low, high = labels.min(), labels.max()
+        if high >= 2**63 or low < -(2**63):
+            raise CloudFileError(path, f"the label field holds values from {low} to {high}, "
+                                 "beyond int64", LABEL_FIX)
+    return labels.astype(np.int64)
+
+
 def cloud_from_fields(path, fields: dict, width: int | None = None,
                       height: int | None = None) -> PointCloud:
     """Named columns (x, y, z and optional normals, colours, label) -> a checked PointCloud.
 
     Recognises normal_x/normal_y/normal_z or nx/ny/nz, packed rgba/rgb or
     red/green/blue (integers are scaled by their maximum, floats taken as [0, 1]),
-    and label. Raises CloudFileError for no points or all-NaN points; NaN rows are kept.
+    and label. Raises CloudFileError for no points, all-NaN points, two of three normal
+    fields, or labels that int64 would change; NaN rows are kept.
     """
     missing = [axis for axis in "xyz" if axis not in fields]
     if missing:
@@ -175,7 +222,12 @@ def cloud_from_fields(path, fields: dict, width: int | None = None,
                              "check the capture; the sensor returned no valid depth")
     normals = colors = labels = None
     for names in NORMAL_NAMES:
-        if all(name in fields for name in names):
+        present = [name for name in names if name in fields]
+        if present and len(present) < 3:
+            missing = " ".join(name for name in names if name not in fields)
+            raise CloudFileError(path, f"incomplete normals: {' '.join(present)} but no {missing}",
+                                 f"store all of {' '.join(names)}, or none of them")
+        if present:
             normals = np.stack([fields[name] for name in names], axis=1).astype(np.float64)
     packed = next((fields[name] for name in _PACKED_COLOURS if name in fields), None)
     if packed is not None:
@@ -185,12 +237,7 @@ def cloud_from_fields(path, fields: dict, width: int | None = None,
         scale = np.iinfo(channels[0].dtype).max if channels[0].dtype.kind in "iu" else 1.0
         colors = np.stack(channels, axis=1).astype(np.float64) / scale
     if "label" in fields:
-        labels = fields["label"]
-        if labels.dtype.kind == "f":
-            if not np.all(labels == np.rint(labels)):  # also false for NaN
-                raise CloudFileError(path, "the label field holds non-integer values",
-                                     REEXPORT)
-        labels = labels.astype(np.int64)
+        labels = _int64_labels(path, fields["label"])
     try:
         return PointCloud(points, normals, colors, labels, width, height)
     except InvalidInputError as exc:

@@ -120,15 +120,30 @@ def test_ply_round_trip_with_colours_normals_labels(tmp_path, binary):
     assert not back.is_organised  # PLY has no notion of an image grid
 
 
-def test_ply_from_trimesh_with_faces_reads_vertices(tmp_path):
+@pytest.mark.parametrize("encoding", ["binary", "ascii"])
+def test_ply_mesh_is_refused_as_a_cloud_but_reads_as_a_mesh(tmp_path, encoding):
+    """Its 8 corners are no scan of the box: taking them as a cloud would mislead."""
     mesh = trimesh.creation.box()
     mesh.visual.vertex_colors = [255, 0, 0, 255]
-    for encoding in ("binary", "ascii"):
-        path = tmp_path / f"box_{encoding}.ply"
-        path.write_bytes(mesh.export(file_type="ply", encoding=encoding))
-        back = read_cloud(path)
-        _assert_points(back.points, mesh.vertices, atol=F32)
-        np.testing.assert_allclose(back.colors, [[1, 0, 0]] * len(mesh.vertices))
+    path = tmp_path / f"box_{encoding}.ply"
+    path.write_bytes(mesh.export(file_type="ply", encoding=encoding))
+    _expect_error(path, "mesh", "12 faces", "pass it as a model", "sample it to a cloud")
+    assert len(read_mesh(path).faces) == 12
+
+
+def test_ply_vertices_followed_by_other_rows_still_read(tmp_path):
+    """An empty face element, or an element of scalar rows after the vertices, is no mesh."""
+    header = "ply\nformat {fmt} 1.0\n" + _PLY_XYZ.decode().format(n=2)
+    ascii_text = (header.format(fmt="ascii") + "element face 0\nproperty list uchar int "
+                  "vertex_indices\nelement edge 1\nproperty int a\nproperty int b\nend_header\n"
+                  "1 2 3\n4 5 6\n0 1\n")
+    (tmp_path / "a.ply").write_text(ascii_text)
+    binary = (header.format(fmt="binary_little_endian") + "element edge 1\nproperty int a\n"
+              "property int b\nend_header\n").encode()
+    (tmp_path / "b.ply").write_bytes(binary + np.arange(1, 7, dtype="<f4").tobytes()
+                                     + np.array([0, 1], "<i4").tobytes())
+    for name in ("a.ply", "b.ply"):
+        _assert_points(read_cloud(tmp_path / name).points, np.array([[1.0, 2, 3], [4, 5, 6]]))
 
 
 def test_ply_big_endian(tmp_path):
@@ -381,6 +396,83 @@ def test_bad_ply(tmp_path, case):
 def test_bad_xyz(tmp_path, text, fragment):
     (tmp_path / "bad.xyz").write_text(text)
     _expect_error(tmp_path / "bad.xyz", fragment)
+
+
+# Each case: suffix, content, fragments the message must hold (the finding and the fix).
+_PCD_XYZL = (["x", "y", "z", "label"], [4, 4, 4, 8], "FFFU")
+_MESSY = {
+    "xyz_colours_as_normals": (".xyz", b"1 2 3 200 180 40\n4 5 6 200 180 40\n",
+                               ("not unit normals", "median norm 272", "must be unit normals",
+                                ".ply or .pcd", "keep only x y z")),
+    "xyz_one_row_not_unit": (".txt", b"1 2 3 0 0 1\n4 5 6 0 0 0.9\nnan nan nan nan nan nan\n",
+                             ("1 of 2 rows", "must be unit normals")),
+    "pcd_binary_extra_point": (".pcd", _pcd_header(*_XYZ_HEADER, 1)
+                               + np.ones(6, "<f4").tobytes(),
+                               ("declares 1 points", "12 more bytes", "point count match")),
+    "ply_ascii_extra_rows": (".ply", b"ply\nformat ascii 1.0\n" + _PLY_XYZ.replace(b"{n}", b"1")
+                             + b"end_header\n1 2 3\n4 5 6\n7 8 9\n", ("1 points", "3 rows")),
+    "ply_binary_extra_point": (".ply", b"ply\nformat binary_little_endian 1.0\n"
+                               + _PLY_XYZ.replace(b"{n}", b"1") + b"end_header\n"
+                               + np.ones(6, "<f4").tobytes(), ("declares 1 points", "12 more")),
+    "ply_extra_rows_after_edges": (".ply", b"ply\nformat ascii 1.0\n" + _PLY_XYZ.replace(
+        b"{n}", b"1") + b"element edge 1\nproperty int a\nend_header\n1 2 3\n0\n0\n",
+        ("declares 2 rows", "holds 3")),
+    "ply_repeated_property": (".ply", b"ply\nformat ascii 1.0\n" + _PLY_XYZ.replace(b"{n}", b"1")
+                              + b"property float z\nend_header\n1 2 3 4\n",
+                              ("repeated vertex property z", "its own name")),
+    "pcd_partial_normals": (".pcd", _pcd_header(["x", "y", "z", "normal_x", "normal_y"], [4] * 5,
+                                                "FFFFF", 1, data="ascii") + b"1 2 3 0 1\n",
+                            ("incomplete normals", "no normal_z", "store all of")),
+    "ply_partial_normals": (".ply", b"ply\nformat ascii 1.0\n" + _PLY_XYZ.replace(b"{n}", b"1")
+                            + b"property float nx\nproperty float nz\nend_header\n1 2 3 0 1\n",
+                            ("incomplete normals", "no ny")),
+    "pcd_viewpoint": (".pcd", _pcd_header(*_XYZ_HEADER, 1, data="ascii").replace(
+        b"VIEWPOINT 0 0 0 1 0 0 0", b"VIEWPOINT 5 0 0 0 0 0 1") + b"1 2 3\n",
+        ("VIEWPOINT 5 0 0 0 0 0 1", "sensor frame", "viewpoint's inverse",
+         "write VIEWPOINT 0 0 0 1 0 0 0")),
+    "pcd_viewpoint_malformed": (".pcd", _pcd_header(*_XYZ_HEADER, 1, data="ascii").replace(
+        b"VIEWPOINT 0 0 0 1 0 0 0", b"VIEWPOINT 0 0 0 1") + b"1 2 3\n", ("7 numbers",)),
+    "pcd_fractional_float_labels": (".pcd", _pcd_header(["x", "y", "z", "label"], [4] * 4, "FFFF",
+                                                        2) + np.array([[1, 2, 3, 0.5],
+                                                                       [1, 2, 3, 1.7]], "<f4").tobytes(),
+                                    ("2 non-integer", "0.5", "whole numbers that fit int64")),
+    "ply_fractional_float_labels": (".ply", b"ply\nformat ascii 1.0\n" + _PLY_XYZ.replace(
+        b"{n}", b"2") + b"property float label\nend_header\n1 2 3 0.5\n1 2 3 1.7\n",
+        ("non-integer", "whole numbers")),
+    "pcd_ascii_label_beyond_int64": (".pcd", _pcd_header(*_PCD_XYZL, 1, data="ascii")
+                                     + f"1 2 3 {2**64 - 1}\n".encode(),
+                                     ("label", "2^53", "fit int64")),
+    "pcd_binary_label_beyond_int64": (".pcd", _pcd_header(*_PCD_XYZL, 1)
+                                      + np.ones(3, "<f4").tobytes()
+                                      + np.array([2**64 - 1], "<u8").tobytes(),
+                                      ("18446744073709551615", "beyond int64", "fit int64")),
+    "pcd_ascii_int_out_of_range": (".pcd", _pcd_header(["x", "y", "z", "i"], [4, 4, 4, 1], "FFFU",
+                                                       1, data="ascii") + b"1 2 3 300\n",
+                                   ("'i'", "uint8 range")),
+}
+
+
+@pytest.mark.filterwarnings("error")  # never a numpy RuntimeWarning on the way
+@pytest.mark.parametrize("case", _MESSY, ids=list(_MESSY))
+def test_refused_instead_of_silently_changed(tmp_path, case):
+    suffix, content, fragments = _MESSY[case]
+    path = tmp_path / f"{case}{suffix}"
+    path.write_bytes(content)
+    _expect_error(path, *fragments)
+
+
+def test_npy_columns_4_to_6_must_be_unit_normals(tmp_path):
+    np.save(tmp_path / "rgb.npy", np.hstack([np.ones((3, 3)), np.full((3, 3), 0.5)]))
+    _expect_error(tmp_path / "rgb.npy", "not unit normals", "median norm 0.866")
+
+
+def test_pcd_identity_viewpoints_and_in_range_labels_still_read(tmp_path):
+    """q and -q are the same rotation; -1 is the "no label" value and must survive."""
+    header = _pcd_header(["x", "y", "z", "label"], [4, 4, 4, 8], "FFFI", 2, data="ascii")
+    for viewpoint in (b"VIEWPOINT 0 0 0 -1 0 0 0", b"VIEWPOINT 0 0 0 1 0 0 0"):
+        (tmp_path / "v.pcd").write_bytes(header.replace(b"VIEWPOINT 0 0 0 1 0 0 0", viewpoint)
+                                         + b"1 2 3 -1\n4 5 6 9007199254740992\n")
+        np.testing.assert_array_equal(read_cloud(tmp_path / "v.pcd").labels, [-1, 2**53])
 
 
 def test_bad_npy(tmp_path):
