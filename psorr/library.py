@@ -24,10 +24,10 @@ from scipy.spatial import ConvexHull, QhullError
 from psorr.decomposition import DecomposeParams, decompose
 from psorr.errors import CloudFileError, InvalidInputError
 from psorr.io import read_mesh
+from psorr.library_file import FORMAT_VERSION, load_models, save_models
 from psorr.ppf import HashParams, PairTable
-from psorr.types import OrientedBox, PointCloud, Primitive, PrimitiveKind, PrimitiveShapeGraph
+from psorr.types import PointCloud, PrimitiveKind, PrimitiveShapeGraph
 
-FORMAT_VERSION = 3  # 3: models keep their mesh, for render-and-compare checks
 MESH_SUFFIXES = (".stl", ".obj", ".ply")
 UNITS = {"m": 1.0, "mm": 0.001}
 
@@ -53,8 +53,14 @@ class TrainParams:
         cylinder_radius_range=(0.003, 0.2), k_neighbours=10))
 
     def __post_init__(self):
-        if not self.sample_spacing > 0 or not self.min_primitive_area >= 0 or self.pair_points < 2:
-            raise InvalidInputError("TrainParams needs sample_spacing > 0, min_primitive_area >= 0, pair_points >= 2")
+        from psorr import param_checks as check
+
+        check.positive(self, "sample_spacing", unit=" metres")
+        check.non_negative(self, "min_primitive_area", unit=" m^2")
+        check.whole(self, "pair_points", minimum=2)  # the centroid and at least one sample
+        check.whole(self, "seed", minimum=0)  # numpy's generators take no negative seed
+        check.instance(self, "hash", HashParams)
+        check.instance(self, "decompose", DecomposeParams)
 
     def fingerprint(self) -> str:
         return json.dumps(asdict(self), sort_keys=True, default=str)
@@ -205,6 +211,9 @@ class ModelLibrary:
                     use_cache: bool = True, progress=None) -> ModelLibrary:
         """Train from mesh files (.stl/.obj/.ply); each model is named by its file stem."""
         params = params or TrainParams()
+        if isinstance(paths, (str, os.PathLike)):
+            raise InvalidInputError(f"from_meshes() takes a list of mesh paths, got the one path {str(paths)!r}: "
+                                    "pass [path]")
         paths = [Path(p) for p in paths]
         if not paths:
             raise InvalidInputError(f"no mesh files given; pass {', '.join(MESH_SUFFIXES)} files or a folder of them")
@@ -216,6 +225,8 @@ class ModelLibrary:
         start = time.perf_counter()
         models = []
         for path in (progress(paths) if progress else paths):
+            if path.is_dir():
+                raise CloudFileError(path, "is a folder", "pass its mesh files (psorr recognize also takes folders)")
             if not path.is_file():
                 raise CloudFileError(path, "no such mesh file", "check the path")
             sha = hashlib.sha256(path.read_bytes()).hexdigest()
@@ -223,76 +234,37 @@ class ModelLibrary:
             cached = cache_dir() / f"{path.stem}-{key}.npz"
             if use_cache and cached.is_file():
                 try:
-                    models.append(_load_models(cached)[0])
+                    models.append(load_models(cached, Model, TrainParams)[0][0])
                     continue
                 except Exception:  # noqa: BLE001  a stale or torn cache entry is retrained, not fatal
                     pass
             model = train_model(path.stem, load_mesh_in_metres(path, units), params, sha)
             models.append(model)
             if use_cache:
-                _save_models(cached, [model])
+                save_models(cached, [model])
         return cls.build(models, params, (time.perf_counter() - start) * 1e3)
 
     def save(self, path) -> Path:
-        return _save_models(Path(path), list(self.models), self.params)
+        """Write the models and their training settings to one .npz file (see psorr.library_file)."""
+        return save_models(Path(path), list(self.models), self.params)
 
     @classmethod
     def load(cls, path, params: TrainParams | None = None) -> ModelLibrary:
+        """A saved library, its pair table rebuilt with ``params``: by default the settings it was trained
+        with (TrainParams() for a file that predates saving them)."""
         path = Path(path)
         start = time.perf_counter()
-        models = _load_models(path)
-        return cls.build(models, params or TrainParams(), (time.perf_counter() - start) * 1e3)
-
-
-def _save_models(path: Path, models: list[Model], params: TrainParams | None = None) -> Path:
-    arrays, meta = {}, {"format": FORMAT_VERSION, "models": []}
-    for i, m in enumerate(models):
-        prims = m.graph.primitives
-        arrays[f"m{i}_points"], arrays[f"m{i}_normals"] = m.points, m.normals
-        arrays[f"m{i}_vertices"], arrays[f"m{i}_faces"] = m.vertices, m.faces
-        for j, p in enumerate(prims):
-            arrays[f"m{i}_p{j}_inliers"] = p.inliers
-        meta["models"].append({
-            "name": m.name, "diameter": m.diameter, "sha256": m.mesh_sha256, "edges": [list(e) for e in m.graph.edges],
-            "primitives": [{"kind": p.kind.value, "params": list(p.params), "centroid": p.centroid.tolist(),
-                            "box": [p.box.center.tolist(), p.box.rotation.tolist(), p.box.extent.tolist()]}
-                           for p in prims]})
-    arrays["meta"] = np.frombuffer(json.dumps(meta).encode(), dtype=np.uint8)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp.npz")
-    np.savez_compressed(tmp, **arrays)
-    tmp.replace(path)  # atomic, so a crash never leaves a torn library
-    return path
-
-
-def _load_models(path: Path) -> list[Model]:
-    try:
-        with np.load(path) as data:
-            meta = json.loads(bytes(data["meta"]).decode())
-            if meta.get("format") != FORMAT_VERSION:
-                raise CloudFileError(path, f"library format {meta.get('format')}, this psorr reads {FORMAT_VERSION}",
-                                     "retrain it from the meshes")
-            models = []
-            for i, m in enumerate(meta["models"]):
-                prims = tuple(
-                    Primitive(PrimitiveKind(p["kind"]), tuple(p["params"]), data[f"m{i}_p{j}_inliers"],
-                              np.array(p["centroid"]), OrientedBox(*(np.array(b) for b in p["box"])))
-                    for j, p in enumerate(m["primitives"]))
-                graph = PrimitiveShapeGraph(prims, tuple(tuple(e) for e in m["edges"]))
-                models.append(Model(m["name"], data[f"m{i}_points"], data[f"m{i}_normals"], graph,
-                                    float(m["diameter"]), m["sha256"], data[f"m{i}_vertices"], data[f"m{i}_faces"]))
-            return models
-    except CloudFileError:
-        raise
-    except (OSError, ValueError, KeyError, json.JSONDecodeError) as exc:
-        raise CloudFileError(path, f"not a psorr model library ({exc.__class__.__name__}: {exc})",
-                             "pass mesh files, or a library written by ModelLibrary.save") from None
+        models, saved = load_models(path, Model, TrainParams)
+        return cls.build(models, params or saved or TrainParams(), (time.perf_counter() - start) * 1e3)
 
 
 def library_from_arguments(items, units: str | None = None, progress=None) -> ModelLibrary:
     """MODELS as the CLI takes it: a folder of meshes, mesh files, or one saved library (.npz)."""
     paths = [Path(i) for i in items]
     if len(paths) == 1 and paths[0].suffix.lower() == ".npz":
+        if units is not None:
+            raise CloudFileError(paths[0], f"--units {units} applies to meshes; a saved library is in metres already",
+                                 "leave out --units")
         return ModelLibrary.load(paths[0])
     meshes = []
     for p in paths:
@@ -300,6 +272,10 @@ def library_from_arguments(items, units: str | None = None, progress=None) -> Mo
             found = sorted(f for f in p.iterdir() if f.suffix.lower() in MESH_SUFFIXES)
             if not found:
                 raise CloudFileError(p, f"the folder holds no {'/'.join(MESH_SUFFIXES)} meshes", _mesh_folder_hint(p))
+            skipped = sorted(f.name for f in p.iterdir() if f.is_file() and f not in found)
+            if skipped:  # said, not silently passed over: a .step or .glb there may be a part the user meant
+                print(f"{p}: skipping {len(skipped)} file(s) that are not {'/'.join(MESH_SUFFIXES)} meshes: "
+                      f"{', '.join(skipped[:8])}{' ...' if len(skipped) > 8 else ''}", file=sys.stderr)
             meshes += found
         else:
             meshes.append(p)
