@@ -22,7 +22,7 @@ import numpy as np
 from scipy.ndimage import binary_closing, binary_dilation
 from scipy.spatial import cKDTree
 
-from psorr.errors import InvalidInputError
+from psorr import param_checks as check
 from psorr.point_check import CheckParams, depth_tolerance, visible_model_points
 from psorr.verify import SceneView
 
@@ -41,12 +41,10 @@ class ContinuationParams:
     check: CheckParams = CheckParams()
 
     def __post_init__(self):
-        if not self.ring > 0 or self.off_support < 0:
-            raise InvalidInputError(f"ContinuationParams.ring must be > 0 and off_support >= 0 metres, got "
-                                    f"{self.ring} and {self.off_support}")
-        if int(self.neighbours) < 1 or int(self.max_points) < 1:
-            raise InvalidInputError(f"ContinuationParams.neighbours and max_points must be >= 1, got "
-                                    f"{self.neighbours} and {self.max_points}")
+        check.positive(self, "ring", unit=" metres")
+        check.non_negative(self, "off_support", unit=" metres")
+        check.whole(self, "neighbours", "max_points")
+        check.instance(self, "check", CheckParams)
 
 
 def continued_share(view: SceneView, model_points: np.ndarray, model_normals: np.ndarray, T_cloud_model: np.ndarray,

@@ -38,12 +38,19 @@ def save_models(path, models, params=None):
             "primitives": [{"kind": p.kind.value, "params": list(p.params), "centroid": p.centroid.tolist(),
                             "box": [p.box.center.tolist(), p.box.rotation.tolist(), p.box.extent.tolist()]}
                            for p in prims]})
-    arrays["meta"] = np.frombuffer(json.dumps(meta).encode(), dtype=np.uint8)
+    # Settings may hold numpy numbers (np.int64(4) is a valid pair_points), which json does not know.
+    arrays["meta"] = np.frombuffer(json.dumps(meta, default=_plain).encode(), dtype=np.uint8)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(path.name + ".tmp.npz")
     np.savez_compressed(tmp, **arrays)
     tmp.replace(path)
     return path
+
+
+def _plain(value):
+    if isinstance(value, np.generic):
+        return value.item()
+    raise TypeError(f"{type(value).__name__} cannot be saved in a library file")
 
 
 def load_models(path, model_class, params_class):

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from psorr import param_checks as check
 from psorr.errors import InvalidInputError
 from psorr.kinect_noise import KINECT_V1
 
@@ -35,6 +36,12 @@ class CheckParams:
     sigmas: float = 3.0
     min_tolerance: float = 0.004
     max_points: int = 1500
+
+    def __post_init__(self):
+        # sigmas 0 is one tolerance at every depth; the floor keeps it above 0 then.
+        check.non_negative(self, "sigmas")
+        check.positive(self, "min_tolerance", unit=" metres")
+        check.whole(self, "max_points")
 
 
 @dataclass(frozen=True)

@@ -68,8 +68,13 @@ class HashParams:
     nearest_neighbour_bins: bool = True  # lookups also probe the adjacent bin nearer each angle
 
     def __post_init__(self):
-        if not 0 < self.angle_step_deg <= 90 or self.distance_tolerance <= 0:
-            raise InvalidInputError("HashParams needs 0 < angle_step_deg <= 90 and distance_tolerance > 0")
+        from psorr import param_checks as check
+
+        check.positive(self, "angle_step_deg", unit=" degrees")
+        if self.angle_step_deg > 90:
+            raise InvalidInputError(f"HashParams.angle_step_deg must be at most 90 degrees, got {self.angle_step_deg}")
+        check.positive(self, "distance_tolerance", unit=" metres")
+        check.flag(self, "nearest_neighbour_bins")
 
     @property
     def n_bins(self) -> int:

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from psorr import param_checks as check
 from psorr.continuation import ContinuationParams
 from psorr.decomposition import DecomposeParams
-from psorr.errors import InvalidInputError
 from psorr.point_check import CheckParams
 from psorr.single_plane import SinglePlaneParams
 from psorr.support_crop import SupportCropParams
@@ -55,27 +55,18 @@ class RecognizeParams:
     support_crop: SupportCropParams = field(default_factory=SupportCropParams)  # PSORR: what is decomposed
 
     def __post_init__(self):
-        for name in ("max_hypotheses", "refine_top", "pair_rounds", "orr_hypotheses", "min_support",
-                     "min_unexplained", "icp_points"):
-            if int(getattr(self, name)) < 1:
-                raise InvalidInputError(f"RecognizeParams.{name} must be >= 1, got {getattr(self, name)}")
-        if int(self.min_support_above_table) < 0:
-            raise InvalidInputError(f"RecognizeParams.min_support_above_table must be >= 0 (0 turns it off), "
-                                    f"got {self.min_support_above_table}")
-        for name in ("leftover_voxel", "fine_voxel", "max_float"):
-            if getattr(self, name) is not None and not getattr(self, name) > 0:
-                raise InvalidInputError(f"RecognizeParams.{name} must be > 0 metres or None, "
-                                        f"got {getattr(self, name)}")
-        for name in ("cluster_cell", "box_thickness", "icp_distance"):
-            if not getattr(self, name) > 0:
-                raise InvalidInputError(f"RecognizeParams.{name} must be > 0 metres, got {getattr(self, name)}")
-        for name in ("min_box_score", "min_visible_fraction", "min_unblocked_fraction", "max_violation_ratio",
-                     "max_shared_pixels"):
-            if not 0 <= getattr(self, name) <= 1:
-                raise InvalidInputError(f"RecognizeParams.{name} must lie in [0, 1], got {getattr(self, name)}")
-        if self.max_continued is not None and not 0 <= self.max_continued <= 1:
-            raise InvalidInputError(f"RecognizeParams.max_continued must lie in [0, 1] or be None, "
-                                    f"got {self.max_continued}")
+        check.whole(self, "max_hypotheses", "refine_top", "pair_rounds", "orr_hypotheses", "min_support",
+                    "min_unexplained", "icp_points")
+        check.whole(self, "min_support_above_table", minimum=0, note=" (0 turns it off)")
+        check.positive(self, "leftover_voxel", "fine_voxel", "max_float", unit=" metres", optional=True)
+        check.positive(self, "cluster_cell", "box_thickness", "icp_distance", unit=" metres")
+        check.within(self, "min_box_score", "min_visible_fraction", "min_unblocked_fraction", "max_violation_ratio",
+                     "max_shared_pixels")
+        check.within(self, "max_continued", optional=True)
+        for name, cls in (("decompose", DecomposeParams), ("check", CheckParams),
+                          ("continuation", ContinuationParams), ("single_plane", SinglePlaneParams),
+                          ("support_crop", SupportCropParams)):
+            check.instance(self, name, cls)
 
 
 @dataclass(frozen=True)

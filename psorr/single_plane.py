@@ -20,6 +20,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from psorr import param_checks as check
+from psorr.errors import InvalidInputError
 from psorr.point_check import CheckParams
 from psorr.types import Primitive, PrimitiveKind
 
@@ -48,6 +50,18 @@ class SinglePlaneParams:
     max_side_ratio: float = 1.15
     slack: float = 0.005
     square_ratio: float = 0.8
+
+    def __post_init__(self):
+        check.flag(self, "enabled")
+        check.whole(self, "max_poses", "top")
+        check.within(self, "min_score", "square_ratio")
+        check.instance(self, "check", CheckParams)
+        check.non_negative(self, "min_area", unit=" m^2")
+        check.non_negative(self, "slack", unit=" metres")
+        check.positive(self, "min_side_ratio", "max_side_ratio")
+        if self.min_side_ratio > self.max_side_ratio:  # no face would ever match
+            raise InvalidInputError(f"SinglePlaneParams.min_side_ratio must be <= max_side_ratio, got "
+                                    f"{self.min_side_ratio} > {self.max_side_ratio}")
 
 
 def _in_plane_axes(plane: Primitive) -> list[tuple[float, np.ndarray]]:

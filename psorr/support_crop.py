@@ -16,7 +16,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.ndimage import binary_dilation
 
-from psorr.errors import InvalidInputError
+from psorr import param_checks as check
 from psorr.types import PointCloud
 
 
@@ -29,9 +29,8 @@ class SupportCropParams:
     cell: float = 0.01        # grid on the plane that the band is measured on
 
     def __post_init__(self):
-        for name in ("off_plane", "cell"):
-            if not getattr(self, name) > 0:
-                raise InvalidInputError(f"SupportCropParams.{name} must be > 0 metres, got {getattr(self, name)}")
+        check.flag(self, "enabled")
+        check.positive(self, "off_plane", "cell", unit=" metres")
 
 
 def along_plane(points: np.ndarray, plane: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -9,6 +9,7 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
+from psorr import param_checks as check
 from psorr import shapes
 from psorr.boxes import box_around_axis
 from psorr.columns import column_mean
@@ -60,22 +61,17 @@ class DecomposeParams:
     point_check: float = 2.0           # final per-point distance test, in inlier distances
 
     def __post_init__(self):
-        positive = ("voxel_size", "inlier_sigmas", "min_inlier_distance", "null_cost", "max_distance_ratio",
-                    "adjacency_gap", "point_check")
-        for name in positive:
-            if not getattr(self, name) > 0:
-                raise InvalidInputError(f"DecomposeParams.{name} must be > 0, got {getattr(self, name)}")
-        for name in ("k_neighbours", "min_points", "ransac_candidates", "ransac_sample",
-                     "ransac_accept_per_round", "ransac_patience", "max_primitives", "max_passes"):
-            if int(getattr(self, name)) < 1:
-                raise InvalidInputError(f"DecomposeParams.{name} must be >= 1, got {getattr(self, name)}")
-        if not 0 < self.max_normal_angle_deg < 90:
-            raise InvalidInputError("DecomposeParams.max_normal_angle_deg must lie in (0, 90)")
-        lo, hi = self.cylinder_radius_range
+        check.positive(self, "voxel_size", "inlier_sigmas", "min_inlier_distance", "null_cost", "max_distance_ratio",
+                       "adjacency_gap", "point_check")
+        check.whole(self, "k_neighbours", "min_points", "ransac_candidates", "ransac_sample",
+                    "ransac_accept_per_round", "ransac_patience", "max_primitives", "max_passes")
+        check.flag(self, "sensor_noise", "cylinders")
+        check.within(self, "max_normal_angle_deg", low=0, high=90, closed=False)
+        lo, hi = check.real_pair(self, "cylinder_radius_range", " with 0 < min < max")
         if not 0 < lo < hi:
-            raise InvalidInputError("DecomposeParams.cylinder_radius_range must be (min, max) with 0 < min < max")
-        if self.smoothness < 0 or self.mdl_k < 0:
-            raise InvalidInputError("DecomposeParams.smoothness and mdl_k must be >= 0")
+            raise InvalidInputError(f"DecomposeParams.cylinder_radius_range must be (min, max) with 0 < min < max, "
+                                    f"got {self.cylinder_radius_range!r}")
+        check.non_negative(self, "smoothness", "mdl_k")
 
     @classmethod
     def names(cls) -> list[str]:
@@ -131,7 +127,10 @@ def decompose(cloud: PointCloud, params: DecomposeParams | None = None,
     if not isinstance(cloud, PointCloud):
         raise InvalidInputError(f"decompose() takes a psorr.PointCloud, got {type(cloud).__name__}")
     require_sensor_metres(cloud, "decompose(): the cloud")
-    params = params or DecomposeParams()
+    if params is None:
+        params = DecomposeParams()
+    check.require_instance(params, DecomposeParams, "decompose()'s params",
+                           "pass DecomposeParams(...), or None for the defaults")
     rng = random_generator(rng, "decompose()")
     clock = [time.perf_counter()]
 
