@@ -176,13 +176,19 @@ def read_mesh(path) -> trimesh.Trimesh:
     _suffix(path, MESH_SUFFIXES, "mesh")
     _check_file(path)
     try:
-        mesh = trimesh.load(path, force="mesh")
+        # Unprocessed first: processing drops the faces of NaN or inf vertices without a word.
+        mesh = trimesh.load(path, force="mesh", process=False)
     except Exception as exc:  # trimesh's many loaders raise many exception types
         raise CloudFileError(path, f"cannot be read as a mesh: {type(exc).__name__}: {exc}",
                              "re-export it as STL, OBJ or PLY") from None
     if not isinstance(mesh, trimesh.Trimesh):
         raise CloudFileError(path, f"holds a {type(mesh).__name__}, not one triangle mesh",
                              "export a single mesh")
+    broken = int(np.count_nonzero(~np.isfinite(mesh.vertices).all(axis=1)))
+    if broken:
+        raise CloudFileError(path, f"{broken} of its {len(mesh.vertices)} vertices are NaN or infinite",
+                             "repair or re-export the mesh")
+    mesh.process()  # what trimesh.load does by default: merge duplicate vertices
     if len(mesh.faces) == 0:
         raise CloudFileError(path, "the mesh has no faces",
                              "export the surface, not just its vertices")

@@ -587,6 +587,9 @@ def test_read_mesh_errors(tmp_path):
     # Triangles collapsed to a line would train a "model" with no surface.
     (tmp_path / "collapsed.obj").write_text("v 0 0 0\nv 0.1 0 0\nv 0.2 0 0\nf 1 2 3\n")
     _expect_mesh_error(tmp_path / "collapsed.obj", "collapsed.obj", "no area")
+    # trimesh would drop the faces of a NaN vertex and train what is left.
+    (tmp_path / "nan.obj").write_text("v 0 0 0\nv 0.1 0 0\nv 0 0.1 0\nv nan 0 0.1\nf 1 2 3\nf 1 2 4\n")
+    _expect_mesh_error(tmp_path / "nan.obj", "1 of its 4 vertices are NaN or infinite")
 
 
 def test_writing_labels_to_a_format_without_them_warns(tmp_path):
