@@ -15,8 +15,8 @@ from psorr.types import Detection
 
 
 class PixelClaims:
-    """The accepted detections of one scene, and the 4x4-pixel blocks (``n_blocks`` of them) each
-    was the first to explain.
+    """The accepted detections of one scene, and the claim cells (``n_blocks`` of them: pixel blocks as
+    wide as 4x4 pixels of a 640-wide image, SceneView.claim_cell_of) each was the first to explain.
 
     A candidate whose supported blocks are held by others beyond ``max_shared`` (a share of its
     blocks) takes them over only when it scores higher than every detection it must displace to

@@ -181,7 +181,7 @@ def check_poses(view, model_points: Sequence[np.ndarray], model_normals: Sequenc
     # Blocks, not pixels: two poses of one instance check different samples of its points, so
     # only coarse cells tell that they explain the same surface.
     span = view.n_blocks
-    cells = np.unique(who[support] * span + view.block_of(u[support], v[support]))
+    cells = np.unique(who[support] * span + view.claim_cell_of(u[support], v[support]))
     ends = np.searchsorted(cells, np.arange(P + 1) * span)
     return [PoseCheck(int(n_visible[k]), int(n_support[k]), int(n_violation[k]), int(n_occluded[k]),
                       cells[ends[k]:ends[k + 1]] - k * span, int(n_above_table[k])) if n_visible[k] else
