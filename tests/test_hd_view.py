@@ -1,6 +1,7 @@
 """A finer sensor than the Kinect: a 1280x720 view of the clutter, seen by recognition as by a Kinect."""
 
 import numpy as np
+import pytest
 
 from psorr.camera import CameraIntrinsics
 from psorr.recognize import Recognizer
@@ -17,7 +18,8 @@ def test_one_instance_is_reported_once_on_a_finer_image(library):
     scene = workpiece_scene(np.random.default_rng(1000), {n: catalog[n].load_mesh() for n in names}, names,
                             intrinsics=HD, occluder=True)
     view = SceneView(scene.cloud)
-    assert view.claim_block == 8  # as wide in metres as a Kinect's 4 pixels: 4-pixel cells let the chassis in twice
+    assert view.focal == pytest.approx(910.0)  # the grid's own, not a Kinect's 1050 (a quarter of pixels empty)
+    assert view.claim_block == 7  # as wide in metres as a Kinect's 4 pixels: 4-pixel cells let the chassis in twice
     detections = Recognizer(library).recognize(scene.cloud, np.random.default_rng(0)).detections
     for k, a in enumerate(detections):
         samples = library.model(a.model).points[::10]
