@@ -40,6 +40,7 @@ bench: setup
 	$(BIN)/python benchmarks/osd_false_positives.py
 	$(BIN)/python benchmarks/table1.py
 	$(BIN)/python benchmarks/peers.py   # the OpenCV peer needs: $(BIN)/pip install -e ".[bench]"
+	$(BIN)/python benchmarks/sensors.py
 	$(BIN)/python benchmarks/grasp_tolerance.py
 	$(BIN)/python benchmarks/episodes.py
 

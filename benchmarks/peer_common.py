@@ -13,6 +13,7 @@ from scipy.spatial import cKDTree
 from psorr.errors import InvalidInputError
 from psorr.open3d_threads import limited_threads
 from psorr.types import PointCloud
+from psorr.workpieces import symmetric_add
 
 # ---------------------------------------------------------------- shared steps
 
@@ -130,3 +131,20 @@ def verify(T: np.ndarray, points: np.ndarray, normals: np.ndarray, scene: np.nda
     hit = tree.query(posed, distance_upper_bound=radius)[0] < radius
     visible = visible_samples(T, points, normals, 2.0 * radius / max(float(np.median(posed[:, 2])), 1e-3))
     return explained, float(hit[visible].mean()) if visible.any() else 0.0, float(hit.mean())
+
+
+def grade(scene, detections, catalog, samples, diameters) -> tuple[int, int]:
+    """(instances found, false detections) of ``detections`` in a synthetic ``scene``: a detection finds an
+    instance of its model not found yet within a symmetry-aware ADD of 0.1 x the model's diameter
+    (``samples`` and ``diameters`` per model name); one that finds none is false, a second report of
+    an instance included."""
+    found, false = set(), 0
+    for det in detections:
+        hits = [k for k, inst in enumerate(scene.instances) if k not in found and inst.name == det.model and
+                symmetric_add(samples[det.model], det.T_cloud_model, inst.T_camera_model, catalog[inst.name])
+                < 0.1 * diameters[det.model]]
+        if hits:
+            found.add(hits[0])
+        else:
+            false += 1
+    return len(found), false

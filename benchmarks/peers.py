@@ -5,7 +5,8 @@ PPF3DDetector (Drost) + ICP (optional: pip install -e ".[bench]"). Every
 method gets all 8 catalog parts as candidates. Scenes are ray-cast Kinect v1
 clouds (640x480) of single parts, and of 4-part clutter with an arm-sized
 capsule occluding the view. A detection is correct when its symmetry-aware
-ADD is under 0.1 x the model diameter; anything else is a false positive.
+ADD is under 0.1 x the model diameter; anything else is a false positive, and so is a second
+detection of one instance.
 
     python benchmarks/peers.py [--singles-seeds 2] [--clutter 6] [--methods psorr,orr,fpfh,opencv_ppf]
 """
@@ -20,6 +21,7 @@ from pathlib import Path
 
 import _single_core  # noqa: F401  (must precede numpy)
 import numpy as np
+from peer_common import grade
 from peer_fpfh import recognize_fpfh
 from peer_opencv import recognize_ppf_opencv
 from tqdm import tqdm
@@ -28,23 +30,10 @@ from psorr.errors import PsorrError
 from psorr.library import ModelLibrary
 from psorr.recognize import Recognizer
 from psorr.scenes import workpiece_scene
-from psorr.workpieces import load_catalog, symmetric_add
+from psorr.workpieces import load_catalog
 
 ROOT = Path(__file__).resolve().parents[1]
 TARGETS = {"single": 0.95, "clutter": 0.85}
-
-
-def _grade(scene, detections, catalog, samples):
-    found, false = set(), 0
-    for det in detections:
-        hits = [k for k, inst in enumerate(scene.instances) if inst.name == det.model and
-                symmetric_add(samples[det.model], det.T_cloud_model, inst.T_camera_model, catalog[inst.name])
-                < 0.1 * DIAMETERS[det.model]]
-        if hits:
-            found.add(hits[0])
-        else:
-            false += 1
-    return len(found), false
 
 
 DIAMETERS: dict[str, float] = {}
@@ -92,7 +81,7 @@ def main(argv=None) -> int:
                 results.pop(method)
                 continue
             results[method]["ms"].append((time.perf_counter() - start) * 1e3)
-            found, false = _grade(scene, detections, catalog, samples)
+            found, false = grade(scene, detections, catalog, samples, DIAMETERS)
             tally = results[method][kind]
             tally[0], tally[1], tally[2] = tally[0] + found, tally[1] + len(scene.instances), tally[2] + false
     n_single = sum(1 for k, _ in scenes if k == "single")
