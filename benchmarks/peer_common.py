@@ -148,3 +148,25 @@ def grade(scene, detections, catalog, samples, diameters) -> tuple[int, int]:
         else:
             false += 1
     return len(found), false
+
+
+def catalog_library():
+    """The catalog, its meshes (name -> trimesh), the library of all its parts (trained or cached), and per
+    model name its ADD samples (every 10th surface point) and diameter (m): what grading needs."""
+    from psorr.library import ModelLibrary
+    from psorr.workpieces import load_catalog
+
+    catalog = load_catalog()
+    meshes = {name: catalog[name].load_mesh() for name in sorted(catalog)}
+    library = ModelLibrary.from_meshes([catalog[n].mesh_path for n in sorted(catalog)])
+    samples = {m.name: m.points[::10] for m in library.models}
+    return catalog, meshes, library, samples, {m.name: m.diameter for m in library.models}
+
+
+def clutter_scene(seed: int, catalog, meshes, intrinsics=None):
+    """The seeded 4-part clutter scene ``seed`` with the capsule occluder (the parts drawn by seed, the
+    layout, camera and noise by 1000 + seed)."""
+    from psorr.scenes import workpiece_scene
+
+    names = list(np.random.default_rng(seed).choice(sorted(catalog), size=4, replace=False))
+    return workpiece_scene(np.random.default_rng(1000 + seed), meshes, names, intrinsics=intrinsics, occluder=True)

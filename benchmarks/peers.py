@@ -21,22 +21,19 @@ from pathlib import Path
 
 import _single_core  # noqa: F401  (must precede numpy)
 import numpy as np
-from peer_common import grade
+from peer_common import catalog_library, clutter_scene, grade
 from peer_fpfh import recognize_fpfh
 from peer_opencv import recognize_ppf_opencv
 from tqdm import tqdm
 
 from psorr.errors import PsorrError
-from psorr.library import ModelLibrary
 from psorr.recognize import Recognizer
 from psorr.scenes import workpiece_scene
-from psorr.workpieces import load_catalog
 
 ROOT = Path(__file__).resolve().parents[1]
 TARGETS = {"single": 0.95, "clutter": 0.85}
 
 
-DIAMETERS: dict[str, float] = {}
 
 
 def main(argv=None) -> int:
@@ -46,11 +43,7 @@ def main(argv=None) -> int:
     parser.add_argument("--methods", default="psorr,orr,fpfh,opencv_ppf")
     parser.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "results")
     args = parser.parse_args(argv)
-    catalog = load_catalog()
-    meshes = {name: catalog[name].load_mesh() for name in sorted(catalog)}
-    library = ModelLibrary.from_meshes([catalog[n].mesh_path for n in sorted(catalog)])
-    samples = {m.name: m.points[::10] for m in library.models}
-    DIAMETERS.update({m.name: m.diameter for m in library.models})
+    catalog, meshes, library, samples, diameters = catalog_library()
     # One recognizer per method for the whole run, as the peers keep their trained models: what a
     # model needs once (PSORR's near-symmetry data, FPFH's model features) is paid on first use.
     psorr, orr = Recognizer(library, "psorr"), Recognizer(library, "orr")
@@ -66,8 +59,7 @@ def main(argv=None) -> int:
         for s in range(args.singles_seeds):
             scenes.append(("single", workpiece_scene(np.random.default_rng(2000 + 10 * k + s), meshes, [name])))
     for seed in range(args.clutter):
-        names = list(np.random.default_rng(seed).choice(sorted(catalog), size=4, replace=False))
-        scenes.append(("clutter", workpiece_scene(np.random.default_rng(1000 + seed), meshes, names, occluder=True)))
+        scenes.append(("clutter", clutter_scene(seed, catalog, meshes)))
     results = {m: {"single": [0, 0, 0], "clutter": [0, 0, 0], "ms": []} for m in chosen}
     # Every method on a scene before the next scene: a slow spell of the machine then falls on all methods
     # alike. Run method after method, two runs of PSORR whose code differed by 2 ms a scene took 785 and 934 ms.
@@ -81,7 +73,7 @@ def main(argv=None) -> int:
                 results.pop(method)
                 continue
             results[method]["ms"].append((time.perf_counter() - start) * 1e3)
-            found, false = grade(scene, detections, catalog, samples, DIAMETERS)
+            found, false = grade(scene, detections, catalog, samples, diameters)
             tally = results[method][kind]
             tally[0], tally[1], tally[2] = tally[0] + found, tally[1] + len(scene.instances), tally[2] + false
     n_single = sum(1 for k, _ in scenes if k == "single")

@@ -19,15 +19,12 @@ from pathlib import Path
 
 import _single_core  # noqa: F401  (must precede numpy)
 import numpy as np
-from peer_common import grade
+from peer_common import catalog_library, clutter_scene, grade
 from tqdm import tqdm
 
 from psorr.camera import CameraIntrinsics
-from psorr.library import ModelLibrary
 from psorr.recognize import Recognizer
-from psorr.scenes import workpiece_scene
 from psorr.types import PointCloud
-from psorr.workpieces import load_catalog
 
 ROOT = Path(__file__).resolve().parents[1]
 SENSORS = {"Kinect v1 640x480": CameraIntrinsics(),
@@ -40,19 +37,13 @@ def main(argv=None) -> int:
     parser.add_argument("--clutter", type=int, default=12, help="clutter scenes per sensor (seeds 0..N-1)")
     parser.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "results")
     args = parser.parse_args(argv)
-    catalog = load_catalog()
-    meshes = {name: catalog[name].load_mesh() for name in sorted(catalog)}
-    library = ModelLibrary.from_meshes([catalog[n].mesh_path for n in sorted(catalog)])
-    samples = {m.name: m.points[::10] for m in library.models}
-    diameters = {m.name: m.diameter for m in library.models}
+    catalog, meshes, library, samples, diameters = catalog_library()
     psorr = Recognizer(library, "psorr")
     rows = {(s, layout): {"found": 0, "instances": 0, "false": 0, "ms": []} for s in SENSORS for layout in LAYOUTS}
     with tqdm(total=len(rows) * args.clutter, desc="scenes", file=sys.stderr) as bar:
         for sensor, intrinsics in SENSORS.items():
             for seed in range(args.clutter):
-                names = list(np.random.default_rng(seed).choice(sorted(catalog), size=4, replace=False))
-                scene = workpiece_scene(np.random.default_rng(1000 + seed), meshes, names, intrinsics=intrinsics,
-                                        occluder=True)
+                scene = clutter_scene(seed, catalog, meshes, intrinsics)
                 clouds = (scene.cloud, PointCloud(scene.cloud.points[scene.cloud.valid_mask]))
                 for layout, cloud in zip(LAYOUTS, clouds):
                     start = time.perf_counter()
