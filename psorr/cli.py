@@ -112,7 +112,6 @@ def _recognize(args) -> int:
     # The outputs and the scene first: a wrong path should not wait for a new library to train.
     check_output(args.png, "--png", ".png")
     cloud = read_cloud(args.scene)
-    require_sensor_metres(cloud, str(args.scene))
     require_seen_from_origin(cloud, str(args.scene))
     library = library_from_arguments(args.models, units=args.units,
                                      progress=lambda xs: tqdm(xs, desc="training", file=sys.stderr))

@@ -23,6 +23,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.spatial import cKDTree
 
+from psorr import param_checks as check
 from psorr.ambiguity import NearSymmetryResolver
 from psorr.box_score import PrimitiveArrays, box_scores
 from psorr.claims import PixelClaims
@@ -39,14 +40,7 @@ from psorr.primitive_match import PrimitiveSizes
 from psorr.recognize_params import METHODS, Recognition, RecognitionStats, RecognizeParams
 from psorr.single_plane import SinglePlaneMatcher
 from psorr.support_crop import crop_to_parts
-from psorr.types import (
-    Detection,
-    PointCloud,
-    PrimitiveKind,
-    random_generator,
-    require_seen_from_origin,
-    require_sensor_metres,
-)
+from psorr.types import Detection, PointCloud, PrimitiveKind, random_generator, require_seen_from_origin
 from psorr.unexplained import blanked, on_detected_surface, part_sized, standing_points, standing_unexplained
 from psorr.verify import SceneView, refine_icp
 
@@ -76,14 +70,12 @@ class Recognizer:
     """Find library models in clouds: `Recognizer(library, method="psorr" | "orr").recognize(cloud)`."""
 
     def __init__(self, library: ModelLibrary, method: str = "psorr", params: RecognizeParams | None = None):
-        if not isinstance(library, ModelLibrary):
-            raise InvalidInputError(f"Recognizer() takes a ModelLibrary, got {type(library).__name__} {library!r:.60}: "
-                                    "load a saved one with ModelLibrary.load(path), or train one with "
-                                    "ModelLibrary.from_meshes([mesh paths])")
-        if params is not None and not isinstance(params, RecognizeParams):
-            raise InvalidInputError(f"Recognizer() takes params=RecognizeParams(...) (settings in a dict: "
-                                    f"RecognizeParams(**settings)), or None for the defaults; got "
-                                    f"{type(params).__name__} {params!r:.60}")
+        check.require_instance(library, ModelLibrary, "Recognizer()'s library",
+                               "load a saved one with ModelLibrary.load(path), or train one with "
+                               "ModelLibrary.from_meshes([mesh paths])")
+        if params is not None:
+            check.require_instance(params, RecognizeParams, "Recognizer()'s params",
+                                   "settings in a dict: RecognizeParams(**settings); None for the defaults")
         if method not in METHODS:
             raise InvalidInputError(f"unknown method {method!r}; choose one of {METHODS}")
         self.library, self.method, self.params = library, method, params or RecognizeParams()
@@ -100,7 +92,6 @@ class Recognizer:
     def recognize(self, cloud: PointCloud, rng: np.random.Generator | None = None) -> Recognition:
         if not isinstance(cloud, PointCloud):
             raise InvalidInputError(f"recognize() takes a psorr.PointCloud, got {type(cloud).__name__}")
-        require_sensor_metres(cloud, "recognize(): the cloud")
         require_seen_from_origin(cloud, "recognize(): the cloud")
         rng = random_generator(rng, "recognize()")
         start = time.perf_counter()
@@ -126,7 +117,6 @@ class Recognizer:
         """
         if not isinstance(cloud, PointCloud):
             raise InvalidInputError(f"refine() takes a psorr.PointCloud, got {type(cloud).__name__}")
-        require_sensor_metres(cloud, "refine(): the cloud")
         require_seen_from_origin(cloud, "refine(): the cloud")
         m = self.library.model(model)
         T = np.asarray(T_cloud_model, dtype=float)

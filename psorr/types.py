@@ -280,9 +280,11 @@ def require_sensor_metres(cloud: PointCloud, what: str) -> None:
 
 def require_seen_from_origin(cloud: PointCloud, what: str) -> None:
     """Refuse a cloud that no sensor at the origin looking along +z (OpenCV axes) could have measured:
-    finite points at z <= 0, or a spread of directions wider than MAX_VIEW_SLOPE. Recognition renders the
-    cloud as a depth image from the origin; a world-frame cloud (a table at z = 0) would make that image
-    terabytes wide, and points behind the sensor would be lost from it. ``what`` names the cloud."""
+    one not in metres (:func:`require_sensor_metres`), finite points at z <= 0, or a spread of directions
+    wider than MAX_VIEW_SLOPE. Recognition renders the cloud as a depth image from the origin; a
+    world-frame cloud (a table at z = 0) would make that image terabytes wide, and points behind the
+    sensor would be lost from it. ``what`` names the cloud."""
+    require_sensor_metres(cloud, what)
     finite = cloud.points[cloud.valid_mask]
     behind = int(np.count_nonzero(finite[:, 2] <= 0))
     fix = ("psorr takes clouds in the sensor's frame, OpenCV axes: x right, y down, z forward from the sensor; "

@@ -117,7 +117,7 @@ def test_decompose_takes_only_decompose_params(bad):
 
 @pytest.mark.parametrize("bad", ["lib.npz", ["a.stl"], None])
 def test_a_recognizer_needs_a_model_library_and_says_how_to_get_one(bad):
-    with pytest.raises(InvalidInputError, match=r"takes a ModelLibrary.*ModelLibrary.load\(path\).*from_meshes"):
+    with pytest.raises(InvalidInputError, match=r"library must be a ModelLibrary.*ModelLibrary.load\(path\).*from_meshes"):
         Recognizer(bad)
 
 
@@ -130,7 +130,7 @@ def block_library(tmp_path_factory):
 
 @pytest.mark.parametrize("bad", [{"refine_top": 4}, {}, "fast", DecomposeParams()])
 def test_a_recognizer_takes_only_recognize_params(block_library, bad):
-    with pytest.raises(InvalidInputError, match=r"params=RecognizeParams\(\.\.\.\).*RecognizeParams\(\*\*settings\)"):
+    with pytest.raises(InvalidInputError, match=r"params must be a RecognizeParams.*RecognizeParams\(\*\*settings\)"):
         Recognizer(block_library, params=bad)
     assert Recognizer(block_library, params=RecognizeParams(refine_top=4)).params.refine_top == 4
 
