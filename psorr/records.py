@@ -177,22 +177,6 @@ def _unpack_colours(path, packed: np.ndarray) -> np.ndarray:
     return rgb
 
 
-def _int64_labels(path, labels: np.ndarray) -> np.ndarray:
-    """A label column -> int64, refusing values the cast would change (0.5, 2**64 - 1)."""
-    if labels.dtype.kind == "f":
-        fractional = ~(labels == np.rint(labels))  # also true for NaN
-        if fractional.any():
-            raise CloudFileError(path, f"the label field holds {fractional.sum()} non-integer "
-                                 f"values (first: {labels[fractional][0]:g})", LABEL_FIX)
-    # int64 holds [-2**63, 2**63); floats that large and uint64 above it would wrap.
-    if labels.dtype.kind in "fu" and len(labels):
-        low, high = labels.min(), labels.max()
-        if high >= 2**63 or low < -(2**63):
-            raise CloudFileError(path, f"the label field holds values from {low} to {high}, "
-                                 "beyond int64", LABEL_FIX)
-    return labels.astype(np.int64)
-
-
 def cloud_from_fields(path, fields: dict, width: int | None = None,
                       height: int | None = None) -> PointCloud:
     """Named columns (x, y, z and optional normals, colours, label) -> a checked PointCloud.
@@ -237,7 +221,7 @@ def cloud_from_fields(path, fields: dict, width: int | None = None,
         scale = np.iinfo(channels[0].dtype).max if channels[0].dtype.kind in "iu" else 1.0
         colors = np.stack(channels, axis=1).astype(np.float64) / scale
     if "label" in fields:
-        labels = _int64_labels(path, fields["label"])
+        labels = fields["label"]  # PointCloud refuses values that int64 would change
     try:
         return PointCloud(points, normals, colors, labels, width, height)
     except InvalidInputError as exc:

@@ -37,11 +37,15 @@ def _integer_labels(value, n: int) -> np.ndarray:
         raw = np.asarray(value)
     except (TypeError, ValueError) as exc:
         raise InvalidInputError(f"labels must be convertible to an int64 array: {exc}") from None
-    if raw.dtype.kind in "fu" and raw.size:
-        whole = raw.dtype.kind == "u" or bool((np.isfinite(raw) & (raw == np.round(raw))).all())
-        if not whole or raw.max() > np.iinfo(np.int64).max:
-            raise InvalidInputError("labels must be whole numbers that fit int64 (-1 for none), got non-integral, "
-                                    "non-finite or too large values")
+    rule = "labels must be whole numbers that fit int64, -1 for no label"
+    if raw.dtype.kind == "f":
+        fractional = ~(raw == np.rint(raw))  # NaN too
+        if fractional.any():
+            raise InvalidInputError(f"labels hold {int(fractional.sum())} non-integer values (first: "
+                                    f"{raw[fractional].flat[0]:g}); {rule}")
+    # int64 holds [-2**63, 2**63): floats that large, and uint64 above it, would wrap.
+    if raw.dtype.kind in "fu" and raw.size and (raw.max() >= 2**63 or raw.min() < -(2**63)):
+        raise InvalidInputError(f"labels hold values from {raw.min()} to {raw.max()}, beyond int64; {rule}")
     return _frozen_array(raw, "labels", np.int64, (), n)
 
 
