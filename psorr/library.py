@@ -21,6 +21,7 @@ import numpy as np
 import trimesh
 from scipy.spatial import ConvexHull, QhullError
 
+from psorr import param_checks as check
 from psorr.decomposition import DecomposeParams, decompose
 from psorr.errors import CloudFileError, InvalidInputError
 from psorr.io import read_mesh
@@ -53,8 +54,6 @@ class TrainParams:
         cylinder_radius_range=(0.003, 0.2), k_neighbours=10))
 
     def __post_init__(self):
-        from psorr import param_checks as check
-
         check.positive(self, "sample_spacing", unit=" metres")
         check.non_negative(self, "min_primitive_area", unit=" m^2")
         check.whole(self, "pair_points", minimum=2)  # the centroid and at least one sample

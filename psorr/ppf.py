@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from psorr import param_checks as check
 from psorr.errors import InvalidInputError
 from psorr.types import PrimitiveKind
 
@@ -68,8 +69,6 @@ class HashParams:
     nearest_neighbour_bins: bool = True  # lookups also probe the adjacent bin nearer each angle
 
     def __post_init__(self):
-        from psorr import param_checks as check
-
         check.positive(self, "angle_step_deg", unit=" degrees")
         if self.angle_step_deg > 90:
             raise InvalidInputError(f"HashParams.angle_step_deg must be at most 90 degrees, got {self.angle_step_deg}")
