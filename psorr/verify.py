@@ -25,6 +25,7 @@ _NORMAL_MARGIN = 0.03  # m of ICP-target normals kept beyond the crop that neede
 # projector's shadow beside a nearer edge is a few centimetres wide at a metre.
 SHADOW_REACH = 8
 GRID_FOCAL = 0.7  # buffer pixels per point spacing for an unorganised cloud whose rays lie on a grid
+_SCATTERED_FOCAL = 0.5  # ... and for scattered points (sampled surfaces, voxel-thinned clouds)
 _GRID_NEIGHBOUR = 0.8  # spacings: a median nearest-neighbour gap beyond this is a grid's, not scattered points'
 
 
@@ -64,7 +65,7 @@ def buffer_focal(cloud: PointCloud, ux: np.ndarray, uy: np.ndarray) -> float:
     if not spacing > 0:
         return KINECT_FOCAL
     on_grid = np.median(disc[:, 1]) > _GRID_NEIGHBOUR * spacing
-    return (GRID_FOCAL if on_grid else 0.5) / spacing
+    return (GRID_FOCAL if on_grid else _SCATTERED_FOCAL) / spacing
 
 
 def _grid_focal(cloud: PointCloud) -> float | None:
