@@ -4,7 +4,9 @@ which search found them first.
 A scene's detections come from several searches in turn (pair rounds, single faces, a finer second
 look). A wrong pose found early (an L bracket laid over a circuit board) must not keep the pixels
 from the right one found later (the board, from its single face): the recognizer keeps the better of
-two detections that explain the same pixels, whichever came first.
+two detections that explain the same pixels, whichever came first. A detection found later that
+covers much of an earlier one's pixels conflicts with it too, although the earlier one holds little
+of its own: a bracket accepted on a chassis' wall, and the chassis found after it.
 """
 
 from __future__ import annotations
@@ -20,13 +22,16 @@ class PixelClaims:
 
     A candidate whose supported blocks are held by others beyond ``max_shared`` (a share of its
     blocks) takes them over only when it scores higher than every detection it must displace to
-    get under that share; the displaced detections are dropped with all their blocks.
+    get under that share; the displaced detections are dropped with all their blocks. A candidate
+    that covers more than ``max_shared`` of a detection's own blocks conflicts with it as well, and
+    displaces it only when it explains more: more blocks, each weighted by its detection's score.
     """
 
     def __init__(self, n_blocks: int, max_shared: float):
         self.owner = np.full(n_blocks, -1, dtype=np.int64)  # index into _entries, -1 for none
         self.max_shared = max_shared
         self._entries: list[tuple[float, Detection] | None] = []
+        self._blocks: list[np.ndarray] = []  # each entry's supported blocks, held or not
 
     @property
     def detections(self) -> list[Detection]:
@@ -38,19 +43,32 @@ class PixelClaims:
         [] if it conflicts with none, None if it loses to one of them."""
         held = self.owner[blocks]
         held = held[held >= 0]
-        if len(held) <= self.max_shared * len(blocks):
-            return []
-        owners, counts = np.unique(held, return_counts=True)
-        remaining, displaced = len(held), []
-        # The largest overlaps first: displacing them frees the most, so the fewest are displaced.
-        for k in np.argsort(-counts, kind="stable"):
-            if remaining <= self.max_shared * len(blocks):
-                break
-            rival = int(owners[k])
-            if self._entries[rival][0] >= score:
-                return None
-            displaced.append(rival)
-            remaining -= counts[k]
+        displaced = []
+        if len(held) > self.max_shared * len(blocks):
+            owners, counts = np.unique(held, return_counts=True)
+            remaining = len(held)
+            # The largest overlaps first: displacing them frees the most, so the fewest are displaced.
+            for k in np.argsort(-counts, kind="stable"):
+                if remaining <= self.max_shared * len(blocks):
+                    break
+                rival = int(owners[k])
+                if self._entries[rival][0] >= score:
+                    return None
+                displaced.append(rival)
+                remaining -= counts[k]
+        covered = np.zeros(len(self.owner), dtype=bool)
+        covered[blocks] = True
+        for rival, entry in enumerate(self._entries):
+            if entry is None or rival in displaced:
+                continue
+            own = self._blocks[rival]
+            if covered[own].sum() > self.max_shared * len(own):
+                # The candidate explains much of what the rival does, and maybe more: the one that explains
+                # more, blocks weighted by score, stays. By score alone a bracket posed on a chassis' wall
+                # (0.71 of it seen, 57 blocks) dropped the true chassis (0.48, 180 blocks) in a 1280x720 view.
+                if entry[0] * len(own) >= score * len(blocks):
+                    return None
+                displaced.append(rival)
         return displaced
 
     def add(self, detection: Detection, blocks: np.ndarray, score: float, displaced: list[int]) -> None:
@@ -60,5 +78,6 @@ class PixelClaims:
             self._entries[rival] = None
         index = len(self._entries)
         self._entries.append((score, detection))
+        self._blocks.append(np.unique(blocks))
         free = blocks[self.owner[blocks] < 0]
         self.owner[free] = index

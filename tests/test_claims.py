@@ -42,6 +42,23 @@ def test_a_better_candidate_displaces_the_detection_found_first():
 def test_only_as_many_rivals_as_needed_are_displaced():
     claims = PixelClaims(100, max_shared=0.3)
     claims.add(_detection("a", 0.5), np.arange(0, 8), 0.5, [])
-    claims.add(_detection("b", 0.9), np.arange(8, 10), 0.9, [])
-    # 10 blocks: 8 held by a, 2 by b. Displacing a leaves 0.2 held, so b (who outscores it) stays.
+    claims.add(_detection("b", 0.9), np.arange(8, 18), 0.9, [])
+    # 10 blocks: 8 held by a, 2 by b. Displacing a leaves 0.2 held, so b (who outscores it, and of whose
+    # own blocks the candidate covers only 0.2) stays.
     assert claims.rivals(np.arange(0, 10), 0.6) == [0]
+
+
+def test_a_candidate_that_covers_a_detection_conflicts_with_it():
+    # A bracket accepted on a chassis' wall holds 12 of the chassis' 60 blocks (0.2, under the share),
+    # but the chassis covers all of the bracket's: both cannot be right. The one that explains more
+    # (blocks weighted by score) stays: 60 x 0.3 = 18 against the bracket's 12 x 0.67 = 8.
+    claims = PixelClaims(100, max_shared=0.3)
+    bracket = _detection("bracket", 0.67)
+    claims.add(bracket, np.arange(0, 12), 0.67, [])
+    assert claims.rivals(np.arange(0, 60), 0.3) == [0]
+    assert claims.rivals(np.arange(0, 60), 0.13) is None  # 7.8 blocks' worth: the bracket explains more
+    # A neighbour that covers under the share of the bracket's blocks is no rival.
+    assert claims.rivals(np.arange(9, 69), 0.01) == []
+    chassis = _detection("chassis", 0.3)
+    claims.add(chassis, np.arange(0, 60), 0.3, [0])
+    assert claims.detections == [chassis]
