@@ -10,8 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
+from psorr.cloud_checks import require_seen_from_origin, require_sensor_metres
 from psorr.errors import CloudFileError, InvalidInputError, PsorrError
-from psorr.types import require_seen_from_origin, require_sensor_metres
 
 # DecomposeParams.voxel_size, which a test holds this to: importing the pipeline for --help costs a second.
 DEFAULT_VOXEL_SIZE = 0.012

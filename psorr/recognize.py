@@ -27,6 +27,7 @@ from psorr import param_checks as check
 from psorr.ambiguity import NearSymmetryResolver
 from psorr.box_score import PrimitiveArrays, box_scores
 from psorr.claims import PixelClaims
+from psorr.cloud_checks import require_seen_from_origin
 from psorr.continuation import continued_share
 from psorr.decomposition import decompose
 from psorr.decomposition.detail import decompose_leftovers
@@ -40,7 +41,7 @@ from psorr.primitive_match import PrimitiveSizes
 from psorr.recognize_params import METHODS, Recognition, RecognitionStats, RecognizeParams
 from psorr.single_plane import SinglePlaneMatcher
 from psorr.support_crop import crop_to_parts
-from psorr.types import Detection, PointCloud, PrimitiveKind, random_generator, require_seen_from_origin
+from psorr.types import Detection, PointCloud, PrimitiveKind, random_generator
 from psorr.unexplained import blanked, on_detected_surface, part_sized, standing_points, standing_unexplained
 from psorr.verify import SceneView, refine_icp
 

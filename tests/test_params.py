@@ -117,7 +117,8 @@ def test_decompose_takes_only_decompose_params(bad):
 
 @pytest.mark.parametrize("bad", ["lib.npz", ["a.stl"], None])
 def test_a_recognizer_needs_a_model_library_and_says_how_to_get_one(bad):
-    with pytest.raises(InvalidInputError, match=r"library must be a ModelLibrary.*ModelLibrary.load\(path\).*from_meshes"):
+    expected = r"library must be a ModelLibrary.*ModelLibrary.load\(path\).*from_meshes"
+    with pytest.raises(InvalidInputError, match=expected):
         Recognizer(bad)
 
 

@@ -3,8 +3,9 @@
 import numpy as np
 import pytest
 
+from psorr.cloud_checks import require_seen_from_origin, require_sensor_metres
 from psorr.errors import InvalidInputError
-from psorr.types import PointCloud, require_seen_from_origin, require_sensor_metres
+from psorr.types import PointCloud
 
 FRONT = np.column_stack([np.linspace(-0.3, 0.3, 12), np.zeros(12), np.full(12, 1.0)])
 

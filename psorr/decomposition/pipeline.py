@@ -12,6 +12,7 @@ from scipy.sparse.csgraph import connected_components
 from psorr import param_checks as check
 from psorr import shapes
 from psorr.boxes import box_around_axis
+from psorr.cloud_checks import require_sensor_metres
 from psorr.columns import column_mean
 from psorr.decomposition.graphcut import alpha_expansion
 from psorr.decomposition.hypotheses import generate_hypotheses, support_mask
@@ -26,7 +27,6 @@ from psorr.types import (
     PrimitiveKind,
     PrimitiveShapeGraph,
     random_generator,
-    require_sensor_metres,
 )
 
 

@@ -1,0 +1,64 @@
+"""Checks that a cloud is what psorr takes: metres, in the sensor's frame with OpenCV axes.
+
+A cloud in millimetres or in a world frame reads without error, and would otherwise fail deep inside
+decomposition or recognition (a depth image terabytes wide); these name the file and the fix instead.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from psorr.errors import InvalidInputError
+from psorr.types import PointCloud
+
+SENSOR_RANGE_LIMIT = 25.0  # m: beyond any Kinect-class sensor's reach (about 10 m)
+MAX_VIEW_SLOPE = 4.0  # |x| / z or |y| / z: a 152 degree view, wider than depth sensors' (a Kinect's is 57 x 43)
+
+
+def _spread(finite: np.ndarray, size: int = 20000) -> np.ndarray:
+    """At most about ``size`` of the (N, 3) finite points, evenly spread. Sampled after dropping NaN rows: a
+    stride over every row could land on NaN rows only (an organised cloud's invalid pixels recur with the
+    row length)."""
+    return finite[:: max(1, len(finite) // size)]
+
+
+def require_sensor_metres(cloud: PointCloud, what: str) -> None:
+    """Refuse a cloud that is evidently not in metres about the sensor: the median distance of its
+    finite points from the origin beyond SENSOR_RANGE_LIMIT, as a Kinect cloud in millimetres (about 800)
+    is. ``what`` names the cloud in the message (a file, or "the cloud")."""
+    _require_metres(cloud.points[cloud.valid_mask], what)
+
+
+def _require_metres(finite: np.ndarray, what: str) -> None:
+    sample = _spread(finite)
+    if len(sample) == 0:
+        return
+    median = float(np.median(np.linalg.norm(sample, axis=1)))
+    if median > SENSOR_RANGE_LIMIT:
+        raise InvalidInputError(
+            f"{what}: its points lie a median {median:.4g} units from the sensor, beyond any depth sensor's "
+            f"{SENSOR_RANGE_LIMIT:.0f} m; psorr takes clouds in metres in the sensor's frame (a cloud in "
+            "millimetres: scale it by 0.001; one in a world frame: move it into the camera's)")
+
+
+def require_seen_from_origin(cloud: PointCloud, what: str) -> None:
+    """Refuse a cloud that no sensor at the origin looking along +z (OpenCV axes) could have measured:
+    one not in metres (:func:`require_sensor_metres`), finite points at z <= 0, or a spread of directions
+    wider than MAX_VIEW_SLOPE. Recognition renders the cloud as a depth image from the origin; a
+    world-frame cloud (a table at z = 0) would make that image terabytes wide, and points behind the
+    sensor would be lost from it. ``what`` names the cloud."""
+    finite = cloud.points[cloud.valid_mask]
+    _require_metres(finite, what)
+    behind = int(np.count_nonzero(finite[:, 2] <= 0))
+    fix = ("psorr takes clouds in the sensor's frame, OpenCV axes: x right, y down, z forward from the sensor; "
+           "one in a world frame: move it into the camera's; one with z towards the sensor: negate y and z")
+    if behind:
+        raise InvalidInputError(f"{what}: {behind} of its {len(finite)} finite points lie at z <= 0, behind the "
+                                f"sensor; {fix}")
+    sample = _spread(finite)
+    if len(sample):
+        slope = float(np.percentile(np.abs(sample[:, :2]).max(axis=1) / sample[:, 2], 99))
+        if slope > MAX_VIEW_SLOPE:
+            angle = 2 * np.degrees(np.arctan(slope))
+            raise InvalidInputError(f"{what}: its points spread over a {angle:.0f} degree view from the origin, "
+                                    f"wider than any depth sensor's; {fix}")
