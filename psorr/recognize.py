@@ -8,7 +8,8 @@ how each is screened:
   (its leftover points decomposed again, finer), clusters the poses by
   vote, and screens each by intersecting model and scene primitive boxes
   (section 2.1.4). Once detections explain some parts, it pairs again among
-  the primitives they leave unexplained, then tries single faces. Points still
+  the primitives they leave unexplained, then tries single faces and long
+  cylinders (psorr.single_plane, psorr.single_cylinder). Points still
   standing on the table unexplained, in part-sized groups, are decomposed again
   at a finer voxel and searched the same way.
 - ORR (Papazov and Burschka) pairs random oriented scene points and screens
@@ -25,7 +26,6 @@ from scipy.spatial import cKDTree
 
 from psorr import param_checks as check
 from psorr.ambiguity import NearSymmetryResolver
-from psorr.box_score import PrimitiveArrays, box_scores
 from psorr.claims import PixelClaims
 from psorr.cloud_checks import require_seen_from_origin
 from psorr.continuation import continued_share
@@ -34,11 +34,12 @@ from psorr.decomposition.detail import decompose_leftovers
 from psorr.errors import InvalidInputError
 from psorr.library import ModelLibrary
 from psorr.orr import orr_hypotheses
+from psorr.pair_candidates import PairCandidates
 from psorr.point_check import CheckParams, check_pose, check_poses
-from psorr.pose_clusters import densest_poses, share_out
+from psorr.pose_clusters import share_out
 from psorr.ppf import scene_oriented_points
-from psorr.primitive_match import PrimitiveSizes
 from psorr.recognize_params import METHODS, Recognition, RecognitionStats, RecognizeParams
+from psorr.single_cylinder import SingleCylinderMatcher
 from psorr.single_plane import SinglePlaneMatcher
 from psorr.support_crop import crop_to_parts
 from psorr.types import Detection, PointCloud, PrimitiveKind, random_generator
@@ -81,14 +82,13 @@ class Recognizer:
             raise InvalidInputError(f"unknown method {method!r}; choose one of {METHODS}")
         self.library, self.method, self.params = library, method, params or RecognizeParams()
         self.max_diameter = max(m.diameter for m in library.models)
-        self._sizes = PrimitiveSizes(library.models)
-        self.model_centres = np.array([m.points.mean(axis=0) for m in library.models])  # (M, 3), model frames
         # Built up front, as model preparation: found on a model's first detection instead, its
         # near-symmetries would add about 0.1 s to that scene.
         self._resolvers = {m.name: NearSymmetryResolver(m) for m in library.models}
         self._model_trees = {m.name: cKDTree(m.points) for m in library.models}
         self._single_plane = SinglePlaneMatcher(library.models, self.params.single_plane)
-        self._model_prims = [PrimitiveArrays.of(m.graph.primitives) for m in library.models]
+        self._single_cylinder = SingleCylinderMatcher(library.models, self.params.single_cylinder)
+        self._pair_candidates = PairCandidates(library, self.params)
 
     def recognize(self, cloud: PointCloud, rng: np.random.Generator | None = None) -> Recognition:
         if not isinstance(cloud, PointCloud):
@@ -202,17 +202,25 @@ class Recognizer:
             open_ &= np.array([not self._on_detected_surface(more, m) for m in members], dtype=bool)
             if not more or open_.sum() < 2:
                 break
-        if p.single_plane.enabled:
-            # A part showing one face gives no pair; its face, matched by size, still gives a pose.
-            # Only faces no detection explains are tried, so these few poses do not crowd out the pairs'.
-            faces = [prims[k] for k in np.flatnonzero(open_) if prims[k].kind is PrimitiveKind.PLANE]
-            face_poses, face_models = self._single_plane.hypotheses(faces)
+        # A part showing one face, or one cylinder, gives no pair; matched by size, it still gives poses.
+        # Only primitives no detection explains are tried, so these few poses do not crowd out the pairs'.
+        for kind, matcher in ((PrimitiveKind.PLANE, self._single_plane),
+                              (PrimitiveKind.CYLINDER, self._single_cylinder)):
+            if not matcher.params.enabled:
+                continue
+            single = [k for k in np.flatnonzero(open_) if prims[k].kind is kind]
+            if kind is PrimitiveKind.CYLINDER:  # nor what the faces' detections explain
+                single = [k for k in single if not self._on_detected_surface(tally.detections, members[k])]
+            poses, models = matcher.hypotheses([prims[k] for k in single])
+            if kind is PrimitiveKind.CYLINDER and not len(poses):
+                continue
             t1 = time.perf_counter()
-            face_candidates = self._best_face_poses(view, face_poses, face_models)
+            candidates = self._best_single_poses(view, poses, models, matcher.params)
             # Screening only, like the pairs' box time: neither making the poses nor accepting them.
             ms = (time.perf_counter() - t1) * 1e3
-            _, tally.claims = self._accept(view, face_candidates, tally.claims)
-            tally.add(len(face_poses), ms)
+            beyond = self._single_cylinder if kind is PrimitiveKind.CYLINDER else None
+            _, tally.claims = self._accept(view, candidates, tally.claims, beyond)
+            tally.add(len(poses), ms)
 
     def _floats(self, view, model, T_cloud_model) -> bool:
         """Is the model's lowest point more than max_float above the supporting plane? Parts rest on the
@@ -241,41 +249,8 @@ class Recognizer:
         reach = self.params.icp_distance / 2
         return any(on_detected_surface(points, d, self._model_trees, reach).mean() >= share for d in detections)
 
-    def _pair_candidates(self, pts, nrm, scene_prims):
-        """Pose hypotheses from pairs of the scene's oriented points (K, 3) and their primitives: matched
-        in the hash table, clustered by vote, and the best by box score. Returns the (model index, pose)
-        candidates, the number of clustered hypotheses, and the ms spent verifying them."""
-        p = self.params
-        poses, models = np.empty((0, 4, 4)), np.empty(0, dtype=np.int64)
-        if len(pts) >= 2:  # pairs need two oriented points
-            i, j = np.nonzero(np.linalg.norm(pts[:, None] - pts[None], axis=2) <= self.max_diameter)
-            keep = i != j
-            i, j = i[keep], j[keep]
-            scene_index, rows = self.library.table.lookup(pts[i], nrm[i], pts[j], nrm[j])
-            scene_index, rows = self._plausible(scene_prims, i, j, scene_index, rows)
-            if len(rows):
-                poses, models = self.library.table.poses(scene_index, rows, pts[i], nrm[i], pts[j])
-                poses, models = densest_poses(poses, models, scene_index, self.model_centres, p.cluster_cell,
-                                              p.max_hypotheses)
-        t1 = time.perf_counter()
-        scores = box_scores(self._model_prims, poses, PrimitiveArrays.of(scene_prims), p.box_thickness, models)
-        order = np.argsort(-scores, kind="stable")
-        order = share_out(order[scores[order] >= p.min_box_score], models, p.refine_top)
-        verify_ms = (time.perf_counter() - t1) * 1e3
-        return [(models[k], poses[k]) for k in order], len(poses), verify_ms
-
-    def _plausible(self, scene_prims, i, j, scene_index, rows):
-        """The lookup matches whose scene primitives could be parts of their model primitives (kind, size)."""
-        table, sizes = self.library.table, self._sizes
-        fits = sizes.compatible(scene_prims)
-        a, b = table.first[rows], table.second[rows]
-        owner = sizes.offsets[table.model[a]]
-        keep = fits[i[scene_index], owner + table.primitive[a]] & fits[j[scene_index], owner + table.primitive[b]]
-        return scene_index[keep], rows[keep]
-
-    def _best_face_poses(self, view, poses, models) -> list[tuple[int, np.ndarray]]:
+    def _best_single_poses(self, view, poses, models, sp) -> list[tuple[int, np.ndarray]]:
         # Boxes cannot rank these (one face covers little of a model's boxes); a coarse point check can.
-        sp = self.params.single_plane
         scores = np.array([c.score for c in check_poses(view, [self.library.models[m].points for m in models],
                                                          [self.library.models[m].normals for m in models],
                                                          poses, sp.check)])
@@ -283,10 +258,12 @@ class Recognizer:
         order = share_out(order[scores[order] >= sp.min_score], models, sp.top)
         return [(models[k], poses[k]) for k in order]
 
-    def _accept(self, view, candidates, claims: PixelClaims | None = None) -> tuple[list[Detection], PixelClaims]:
+    def _accept(self, view, candidates, claims: PixelClaims | None = None,
+                beyond: SingleCylinderMatcher | None = None) -> tuple[list[Detection], PixelClaims]:
         """The new detections among ``candidates`` (model index, pose), and ``claims`` with them added: the
         detections so far and the pixels they explain. A candidate that shares more than max_shared_pixels of
-        its pixels with earlier detections is dropped, unless it scores higher, when it displaces them."""
+        its pixels with earlier detections is dropped, unless it scores higher, when it displaces them. Poses
+        from one cylinder (``beyond``) must also be supported off the model's long cylinders."""
         p = self.params
         # PSORR's candidates that end up accepted are seen through by at most 0.17 after the coarse
         # pass (22 benchmark scenes), so twice the acceptance bar drops about half the rest. ORR's
@@ -310,7 +287,8 @@ class Recognizer:
             enough_support = (check.n_support >= p.min_support
                               and check.n_support_above_table >= p.min_support_above_table)
             if (enough_support and seen_enough and check.violation_ratio <= p.max_violation_ratio
-                    and not self._floats(view, model, T)):
+                    and not self._floats(view, model, T)
+                    and (beyond is None or beyond.seen_beyond(view, model_index, T, p.check, p.max_violation_ratio))):
                 scored.append((check.score, model, T, check))
         scored.sort(key=lambda s: -s[0])
         if claims is None:

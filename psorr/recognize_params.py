@@ -8,6 +8,7 @@ from psorr import param_checks as check
 from psorr.continuation import ContinuationParams
 from psorr.decomposition import DecomposeParams
 from psorr.point_check import CheckParams
+from psorr.single_cylinder import SingleCylinderParams
 from psorr.single_plane import SinglePlaneParams
 from psorr.support_crop import SupportCropParams
 from psorr.types import Detection
@@ -52,6 +53,7 @@ class RecognizeParams:
     max_continued: float | None = 0.2
     continuation: ContinuationParams = field(default_factory=ContinuationParams)
     single_plane: SinglePlaneParams = field(default_factory=SinglePlaneParams)  # PSORR: poses from one face
+    single_cylinder: SingleCylinderParams = field(default_factory=SingleCylinderParams)  # ... and one cylinder
     support_crop: SupportCropParams = field(default_factory=SupportCropParams)  # PSORR: what is decomposed
 
     def __post_init__(self):
@@ -65,6 +67,7 @@ class RecognizeParams:
         check.within(self, "max_continued", optional=True)
         for name, cls in (("decompose", DecomposeParams), ("check", CheckParams),
                           ("continuation", ContinuationParams), ("single_plane", SinglePlaneParams),
+                          ("single_cylinder", SingleCylinderParams),
                           ("support_crop", SupportCropParams)):
             check.instance(self, name, cls)
 

@@ -15,12 +15,13 @@ from psorr.errors import InvalidInputError
 from psorr.library import ModelLibrary, TrainParams
 from psorr.point_check import CheckParams
 from psorr.recognize import RecognizeParams, Recognizer
+from psorr.single_cylinder import SingleCylinderParams
 from psorr.single_plane import SinglePlaneParams
 from psorr.support_crop import SupportCropParams
 
 NAN = float("nan")
 CLASSES = [DecomposeParams, RecognizeParams, TrainParams, ContinuationParams, CheckParams, SinglePlaneParams,
-           SupportCropParams]
+           SingleCylinderParams, SupportCropParams]
 
 REPORTED = [
     (RecognizeParams, "max_hypotheses", NAN),

@@ -71,9 +71,10 @@ def test_single_parts_are_recognised(library, catalog):
             for det in result.detections:
                 assert 0 < det.score <= 1 and 0 < det.visible_fraction <= 1
             # Per search (the first, and the finer second look), pair clusters each round plus poses from
-            # single faces left unexplained.
+            # single faces and cylinders left unexplained.
             params = RecognizeParams()
-            per_search = params.pair_rounds * params.max_hypotheses + params.single_plane.max_poses
+            per_search = (params.pair_rounds * params.max_hypotheses + params.single_plane.max_poses
+                          + params.single_cylinder.max_poses)
             assert result.stats.hypotheses <= 2 * per_search
     assert found >= 0.95 * total, f"single-part recall {found}/{total}"
     assert false <= 2, f"{false} false positives in {total} single-part scenes"
