@@ -202,25 +202,37 @@ class Recognizer:
             open_ &= np.array([not self._on_detected_surface(more, m) for m in members], dtype=bool)
             if not more or open_.sum() < 2:
                 break
-        # A part showing one face, or one cylinder, gives no pair; matched by size, it still gives poses.
-        # Only primitives no detection explains are tried, so these few poses do not crowd out the pairs'.
-        for kind, matcher in ((PrimitiveKind.PLANE, self._single_plane),
-                              (PrimitiveKind.CYLINDER, self._single_cylinder)):
-            if not matcher.params.enabled:
-                continue
-            single = [k for k in np.flatnonzero(open_) if prims[k].kind is kind]
-            if kind is PrimitiveKind.CYLINDER:  # nor what the faces' detections explain
-                single = [k for k in single if not self._on_detected_surface(tally.detections, members[k])]
-            poses, models = matcher.hypotheses([prims[k] for k in single])
-            if kind is PrimitiveKind.CYLINDER and not len(poses):
-                continue
-            t1 = time.perf_counter()
-            candidates = self._best_single_poses(view, poses, models, matcher.params)
-            # Screening only, like the pairs' box time: neither making the poses nor accepting them.
-            ms = (time.perf_counter() - t1) * 1e3
-            beyond = self._single_cylinder if kind is PrimitiveKind.CYLINDER else None
-            _, tally.claims = self._accept(view, candidates, tally.claims, beyond)
-            tally.add(len(poses), ms)
+        # A part showing one face, or one long cylinder, gives no pair; matched by size, it still gives
+        # poses. Only primitives no detection explains are tried (a cylinder: nor what the faces' detections
+        # explain), so these few poses do not crowd out the pairs'.
+        unexplained = np.flatnonzero(open_)
+        self._single_search(view, tally, self._single_plane,
+                            [prims[k] for k in unexplained if prims[k].kind is PrimitiveKind.PLANE])
+        self._single_search(view, tally, self._single_cylinder,
+                            [prims[k] for k in unexplained if prims[k].kind is PrimitiveKind.CYLINDER
+                             and not self._on_detected_surface(tally.detections, members[k])],
+                            beyond=self._single_cylinder)
+
+    def _single_search(self, view, tally: _Tally, matcher, primitives, beyond=None) -> None:
+        """Poses from single ``primitives`` matched by size (``matcher``: a SinglePlaneMatcher or a
+        SingleCylinderMatcher), ranked by the coarse point check; the best go through acceptance (poses from
+        one cylinder must be seen ``beyond`` it), and what they find, and cost, is added to ``tally``."""
+        if not matcher.params.enabled:
+            return
+        poses, models = matcher.hypotheses(primitives)
+        if not len(poses):
+            return
+        t1 = time.perf_counter()
+        # Boxes cannot rank these (one face covers little of a model's boxes); a coarse point check can.
+        sp, lib = matcher.params, self.library.models
+        checks = check_poses(view, [lib[m].points for m in models], [lib[m].normals for m in models], poses, sp.check)
+        scores = np.array([c.score for c in checks])
+        order = np.argsort(-scores, kind="stable")
+        order = share_out(order[scores[order] >= sp.min_score], models, sp.top)
+        # Screening only, like the pairs' box time: neither making the poses nor accepting them.
+        ms = (time.perf_counter() - t1) * 1e3
+        _, tally.claims = self._accept(view, [(models[k], poses[k]) for k in order], tally.claims, beyond)
+        tally.add(len(poses), ms)
 
     def _floats(self, view, model, T_cloud_model) -> bool:
         """Is the model's lowest point more than max_float above the supporting plane? Parts rest on the
@@ -248,15 +260,6 @@ class Recognizer:
         points = points[:: max(1, len(points) // 200)]
         reach = self.params.icp_distance / 2
         return any(on_detected_surface(points, d, self._model_trees, reach).mean() >= share for d in detections)
-
-    def _best_single_poses(self, view, poses, models, sp) -> list[tuple[int, np.ndarray]]:
-        # Boxes cannot rank these (one face covers little of a model's boxes); a coarse point check can.
-        scores = np.array([c.score for c in check_poses(view, [self.library.models[m].points for m in models],
-                                                         [self.library.models[m].normals for m in models],
-                                                         poses, sp.check)])
-        order = np.argsort(-scores, kind="stable")
-        order = share_out(order[scores[order] >= sp.min_score], models, sp.top)
-        return [(models[k], poses[k]) for k in order]
 
     def _accept(self, view, candidates, claims: PixelClaims | None = None,
                 beyond: SingleCylinderMatcher | None = None) -> tuple[list[Detection], PixelClaims]:
