@@ -35,7 +35,9 @@ from psorr.types import Primitive, PrimitiveKind
 class SingleCylinderParams:
     """Which cylinders may give a pose on their own. Lengths in metres, areas in m^2.
 
-    A model cylinder counts if its side view (diameter x length) is at least ``min_area``. A scene
+    A model cylinder counts if its side view (diameter x length) is at least ``min_area`` and it is
+    at least ``min_elongation`` diameters long (a bore or a pin is too rough a fit to place a part by,
+    and a short cylinder is on too many parts). A scene
     cylinder matches it when its radius is within RADIUS_TOLERANCE of the model's and its length
     within [``min_length_ratio``, ``max_length_ratio``] x the model's (+- ``slack``): a cylinder seen
     whole, or nearly so. Each match gives ``roll_steps`` turns about the axis, both ways along it; at
