@@ -36,8 +36,8 @@ class SingleCylinderParams:
     """Which cylinders may give a pose on their own. Lengths in metres, areas in m^2.
 
     A model cylinder counts if its side view (diameter x length) is at least ``min_area`` and it is
-    at least ``min_elongation`` diameters long (a bore or a pin is too rough a fit to place a part by,
-    and a short cylinder is on too many parts). A scene
+    at least ``min_elongation`` diameters long (of our catalog's cylinders, only the pipe tee's run,
+    outside and bore, pass both). A scene
     cylinder matches it when its radius is within RADIUS_TOLERANCE of the model's and its length
     within [``min_length_ratio``, ``max_length_ratio``] x the model's (+- ``slack``): a cylinder seen
     whole, or nearly so. Each match gives ``roll_steps`` turns about the axis, both ways along it; at
