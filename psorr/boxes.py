@@ -15,7 +15,8 @@ from psorr.columns import column_max, column_min
 from psorr.types import OrientedBox
 
 
-def _orthonormal_frame(axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def orthonormal_frame(axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Two unit vectors (3,) that make a right-handed frame with the unit ``axis`` (3,)."""
     helper = np.array([1.0, 0.0, 0.0]) if abs(axis[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
     u = np.cross(axis, helper)
     u /= np.linalg.norm(u)
@@ -52,7 +53,7 @@ def box_around_axis(points: np.ndarray, axis: np.ndarray, hull_points: np.ndarra
     part; the extents are always those of every point.
     """
     axis = np.asarray(axis, float) / np.linalg.norm(axis)
-    u, v = _orthonormal_frame(axis)
+    u, v = orthonormal_frame(axis)
     source = points if hull_points is None else hull_points
     _, angle, _ = min_area_rectangle(np.column_stack([source @ u, source @ v]))
     c, s = np.cos(angle), np.sin(angle)

@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from psorr import param_checks as check
+from psorr.boxes import orthonormal_frame
 from psorr.errors import InvalidInputError
 from psorr.point_check import CheckParams, check_pose
 from psorr.primitive_match import RADIUS_TOLERANCE
@@ -86,9 +87,7 @@ def axis_frame(cylinder: Primitive, towards: np.ndarray | None = None) -> np.nda
     middle = cylinder.axis_point + ((np.asarray(cylinder.box.center) - cylinder.axis_point) @ a) * a
     across = (np.asarray(towards, float) - middle) if towards is not None else np.zeros(3)
     across = across - (across @ a) * a
-    if np.linalg.norm(across) < 1e-9:
-        across = np.cross(a, [1.0, 0.0, 0.0] if abs(a[0]) < 0.9 else [0.0, 1.0, 0.0])
-    x = across / np.linalg.norm(across)
+    x = across / np.linalg.norm(across) if np.linalg.norm(across) >= 1e-9 else orthonormal_frame(a)[0]
     frame = np.eye(4)
     frame[:3, 0], frame[:3, 1], frame[:3, 2], frame[:3, 3] = x, np.cross(a, x), a, middle
     return frame

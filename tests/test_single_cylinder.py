@@ -38,10 +38,15 @@ def _moved(cylinder: Primitive, T: np.ndarray) -> Primitive:
                      OrientedBox(R @ np.asarray(box.center) + t, R @ box.rotation, box.extent))
 
 
+def _tee_run(library) -> Primitive:
+    """The pipe tee model's run: its widest, longest cylinder (110 mm long, 21 mm in radius)."""
+    return max((p for p in library.model("pipe_tee").graph.primitives if p.kind is PrimitiveKind.CYLINDER),
+               key=lambda p: (p.radius, cylinder_length(p)))
+
+
 def test_a_cylinder_frame_sits_on_its_axis(parts):
     _, library = parts
-    run = max((p for p in library.model("pipe_tee").graph.primitives if p.kind is PrimitiveKind.CYLINDER),
-              key=lambda p: (p.radius, cylinder_length(p)))
+    run = _tee_run(library)
     assert round(cylinder_length(run) * 1e3) == 110 and round(run.radius * 1e3) == 21
     towards = np.array([0.3, -0.2, 0.5])
     F = axis_frame(run, towards)
@@ -55,8 +60,7 @@ def test_a_cylinder_frame_sits_on_its_axis(parts):
 def test_a_cylinder_seen_whole_gives_the_pose_to_within_half_a_roll_step(parts):
     catalog, library = parts
     model = library.model("pipe_tee")
-    run = max((p for p in model.graph.primitives if p.kind is PrimitiveKind.CYLINDER),
-              key=lambda p: (p.radius, cylinder_length(p)))
+    run = _tee_run(library)
     truth = np.eye(4)
     truth[:3, :3], truth[:3, 3] = from_rotation_vector(np.array([0.4, -1.1, 0.7])), (0.05, -0.02, 0.8)
     params = SingleCylinderParams()
@@ -74,8 +78,7 @@ def test_a_cylinder_seen_whole_gives_the_pose_to_within_half_a_roll_step(parts):
 
 def test_cylinders_of_another_size_give_no_pose(parts):
     _, library = parts
-    run = max((p for p in library.model("pipe_tee").graph.primitives if p.kind is PrimitiveKind.CYLINDER),
-              key=lambda p: (p.radius, cylinder_length(p)))
+    run = _tee_run(library)
     thin = Primitive(PrimitiveKind.CYLINDER, tuple(np.r_[run.axis_point, run.axis, 0.005]), run.inliers, run.centroid,
                      run.box)
     poses, owners = SingleCylinderMatcher(library.models).hypotheses([thin])
