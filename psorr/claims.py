@@ -11,6 +11,8 @@ of its own: a bracket accepted on a chassis' wall, and the chassis found after i
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from psorr.types import Detection
@@ -81,3 +83,21 @@ class PixelClaims:
         self._blocks.append(np.unique(blocks))
         free = blocks[self.owner[blocks] < 0]
         self.owner[free] = index
+
+
+@dataclass
+class SearchTally:
+    """What one recognize() call has found so far, and its cost."""
+
+    decomposition_ms: float = 0.0
+    claims: PixelClaims | None = None  # the detections, and the 4x4-pixel blocks they explain
+    hypotheses: int = 0
+    verify_ms: float = 0.0
+
+    @property
+    def detections(self) -> list[Detection]:
+        return self.claims.detections if self.claims is not None else []
+
+    def add(self, hypotheses: int, verify_ms: float) -> None:
+        self.hypotheses += hypotheses
+        self.verify_ms += verify_ms

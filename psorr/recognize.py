@@ -19,14 +19,14 @@ how each is screened:
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import numpy as np
 from scipy.spatial import cKDTree
 
 from psorr import param_checks as check
 from psorr.ambiguity import NearSymmetryResolver
-from psorr.claims import PixelClaims
+from psorr.claims import PixelClaims, SearchTally
 from psorr.cloud_checks import require_seen_from_origin
 from psorr.continuation import continued_share
 from psorr.decomposition import decompose
@@ -48,24 +48,6 @@ from psorr.verify import SceneView, refine_icp
 
 _COARSE = CheckParams(max_points=300)
 _TABLE_EXTENT = 1.2  # in diameters of the largest model: a primitive larger than this is the table
-
-
-@dataclass
-class _Tally:
-    """What one recognize() call has found so far, and its cost."""
-
-    decomposition_ms: float = 0.0
-    claims: PixelClaims | None = None  # the detections, and the 4x4-pixel blocks they explain
-    hypotheses: int = 0
-    verify_ms: float = 0.0
-
-    @property
-    def detections(self) -> list[Detection]:
-        return self.claims.detections if self.claims is not None else []
-
-    def add(self, hypotheses: int, verify_ms: float) -> None:
-        self.hypotheses += hypotheses
-        self.verify_ms += verify_ms
 
 
 class Recognizer:
@@ -91,6 +73,12 @@ class Recognizer:
         self._pair_candidates = PairCandidates(library, self.params)
 
     def recognize(self, cloud: PointCloud, rng: np.random.Generator | None = None) -> Recognition:
+        """The library's models found in ``cloud`` (metres, sensor frame, seen from the origin; an image or
+        unorganised points). Returns a Recognition: the detections in the order they were accepted (by
+        score within each search round), each with model name, ``T_cloud_model`` (4, 4), score in [0, 1]
+        and the seen share of the model's surface; and stats (hypotheses, verification ms per hypothesis,
+        decomposition and total ms). ``rng`` drives the random draws (default: ``default_rng(0)``), so one
+        seed gives the same detections."""
         if not isinstance(cloud, PointCloud):
             raise InvalidInputError(f"recognize() takes a psorr.PointCloud, got {type(cloud).__name__}")
         require_seen_from_origin(cloud, "recognize(): the cloud")
@@ -167,7 +155,7 @@ class Recognizer:
         scene = decompose(cropped, p.decompose, rng)
         if p.leftover_voxel is not None:
             scene = decompose_leftovers(cropped, scene, p.leftover_voxel, p.decompose, rng)
-        tally = _Tally(decomposition_ms=(time.perf_counter() - t0) * 1e3)
+        tally = SearchTally(decomposition_ms=(time.perf_counter() - t0) * 1e3)
         self._search(cloud, view, scene, tally)
         if p.fine_voxel is not None:
             # What stands on the table and no detection explains gets a second look, decomposed finer.
@@ -183,7 +171,7 @@ class Recognizer:
                 self._search(cloud, view, fine, tally)
         return tally.detections, tally.hypotheses, tally.verify_ms, tally.decomposition_ms
 
-    def _search(self, cloud, view, scene, tally: _Tally) -> None:
+    def _search(self, cloud, view, scene, tally: SearchTally) -> None:
         """Pair rounds, then single faces, over the primitives of the decomposition ``scene``; what
         they find, and what it cost, is added to ``tally``."""
         p = self.params
@@ -213,7 +201,7 @@ class Recognizer:
                              and not self._on_detected_surface(tally.detections, members[k])],
                             beyond=self._single_cylinder)
 
-    def _single_search(self, view, tally: _Tally, matcher, primitives, beyond=None) -> None:
+    def _single_search(self, view, tally: SearchTally, matcher, primitives, beyond=None) -> None:
         """Poses from single ``primitives`` matched by size (``matcher``: a SinglePlaneMatcher or a
         SingleCylinderMatcher), ranked by the coarse point check; the best go through acceptance (poses from
         one cylinder must be seen ``beyond`` it), and what they find, and cost, is added to ``tally``."""

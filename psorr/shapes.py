@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from psorr.boxes import orthonormal_frame
 from psorr.columns import column_mean
 from psorr.types import PrimitiveKind
 
@@ -97,8 +98,7 @@ def fit_plane(points: np.ndarray, normals: np.ndarray | None = None) -> tuple[fl
 def _circle_about(points: np.ndarray, axis: np.ndarray):
     """Algebraic (Kasa) circle of the points projected along `axis`:
     (centre (3,), radius, rms residual) or None."""
-    u = _unit(np.cross(axis, [1.0, 0.0, 0.0] if abs(axis[0]) < 0.9 else [0.0, 1.0, 0.0]))
-    v = np.cross(axis, u)
+    u, v = orthonormal_frame(axis)
     centroid = column_mean(points)
     rel = points - centroid
     x, y = rel @ u, rel @ v
@@ -151,8 +151,7 @@ def refine_cylinder(points: np.ndarray, params, max_points: int = 3000, rng=None
     stride = max(1, len(points) // max_points)
     pts = points[::stride]
     axis0 = p0[3:6] / np.linalg.norm(p0[3:6])
-    u = _unit(np.cross(axis0, [1.0, 0.0, 0.0] if abs(axis0[0]) < 0.9 else [0.0, 1.0, 0.0]))
-    v = np.cross(axis0, u)
+    u, v = orthonormal_frame(axis0)
 
     def unpack(x):
         axis = _unit(axis0 + x[0] * u + x[1] * v)

@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from psorr import param_checks as check
+from psorr.boxes import orthonormal_frame
 from psorr.errors import InvalidInputError
 from psorr.point_check import CheckParams
 from psorr.types import Primitive, PrimitiveKind
@@ -82,7 +83,7 @@ def plane_frames(plane: Primitive, quarter_turns: bool) -> np.ndarray:
     in-plane side (either way; and along the short side too with ``quarter_turns``)."""
     n = plane.normal
     in_plane = [axis for _, axis in _in_plane_axes(plane)]
-    long_side = in_plane[0] if in_plane else np.cross(n, [1.0, 0.0, 0.0] if abs(n[0]) < 0.9 else [0.0, 1.0, 0.0])
+    long_side = in_plane[0] if in_plane else orthonormal_frame(n)[0]
     x = long_side - (long_side @ n) * n
     x /= np.linalg.norm(x)
     directions = [x, -x] + ([np.cross(n, x), -np.cross(n, x)] if quarter_turns else [])

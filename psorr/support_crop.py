@@ -17,6 +17,7 @@ import numpy as np
 from scipy.ndimage import binary_dilation
 
 from psorr import param_checks as check
+from psorr.boxes import orthonormal_frame
 from psorr.types import PointCloud
 
 
@@ -37,9 +38,7 @@ def along_plane(points: np.ndarray, plane: np.ndarray) -> tuple[np.ndarray, np.n
     """Coordinates (N, 2) of ``points`` (N, 3) along the ``plane`` (a, b, c, d; unit normal), on two axes
     orthogonal to its normal, and their heights (N,) above it; metres."""
     normal = np.asarray(plane[:3], dtype=float)
-    u = np.cross(normal, [1.0, 0.0, 0.0] if abs(normal[0]) < 0.9 else [0.0, 1.0, 0.0])
-    u /= np.linalg.norm(u)
-    return points @ np.column_stack([u, np.cross(normal, u)]), points @ normal + plane[3]
+    return points @ np.column_stack(orthonormal_frame(normal)), points @ normal + plane[3]
 
 
 def crop_to_parts(cloud: PointCloud, plane: np.ndarray | None, margin: float,
