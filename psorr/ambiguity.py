@@ -201,6 +201,12 @@ class NearSymmetryResolver:
         self.turns, self._exact_but_features, self.axis, self.slide = found
         self._centre = model.points.mean(axis=0)
 
+    @property
+    def has_broad_twins(self) -> bool:
+        """Does a half turn move much of the surface (an L bracket's legs swapped), not only small features
+        (the chassis' window)? Then the point check, too, tells the twin poses apart."""
+        return bool((~self._exact_but_features).any())
+
     def resolve(self, view: SceneView, T_cloud_model: np.ndarray,
                 icp_distance: float) -> tuple[np.ndarray, PoseCheck, tuple[np.ndarray, ...]]:
         """The best pose (4, 4), its dense :class:`PoseCheck`, and the near-symmetric poses (4, 4) the

@@ -286,15 +286,25 @@ class Recognizer:
             claims = PixelClaims(view.n_blocks, p.max_shared_pixels)
         detections = []
         for score, model, T, check in scored:
-            displaced = claims.rivals(check.supported_blocks, score)
+            displaced, detection = claims.rivals(check.supported_blocks, score), None
+            if displaced is None and self._resolvers[model.name].has_broad_twins:
+                # Settled by the pose as found, a part's twin pose (an L bracket with its legs swapped) kept
+                # the pixels from a candidate that its near-symmetries take to the true pose: a second
+                # chance, judged at the pose they give. Only for the losers of parts whose twins the point
+                # check tells apart: a chassis' twin, turned end for end, scored 0.808 to the true 0.800.
+                detection = self._resolved(view, model, T)
+                check = check_pose(view, model.points, model.normals, detection.T_cloud_model, p.check)
+                score = check.score
+                displaced = claims.rivals(check.supported_blocks, score)
             if displaced is None:
                 continue
             # Only now, on the few survivors, is a dense check affordable: it tells a part from its
             # near-symmetric twin pose (a tray turned end for end) by the small features.
-            detection = self._resolved(view, model, T)
+            detection = detection or self._resolved(view, model, T)
             if self._on_larger_object(view, model, detection.T_cloud_model):
                 continue
             claims.add(detection, check.supported_blocks, score, displaced)
             detections.append(detection)
-        return detections, claims
+        standing = {id(d) for d in claims.detections}  # a later candidate here may have displaced an earlier one
+        return [d for d in detections if id(d) in standing], claims
 
