@@ -94,3 +94,8 @@ def share_out(order, models, limit):
             if queue and len(chosen) < limit:
                 chosen.append(queue.pop(0))
     return chosen
+
+
+def same_pose(points: np.ndarray, A: np.ndarray, B: np.ndarray, tolerance: float) -> bool:
+    """Do poses A and B (4, 4) place ``points`` (N, 3) within ``tolerance`` metres of each other, on average?"""
+    return float(np.linalg.norm(points @ (A[:3, :3] - B[:3, :3]).T + (A[:3, 3] - B[:3, 3]), axis=1).mean()) < tolerance

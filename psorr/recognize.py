@@ -36,7 +36,7 @@ from psorr.library import ModelLibrary
 from psorr.orr import orr_hypotheses
 from psorr.pair_candidates import PairCandidates
 from psorr.point_check import CheckParams, check_pose, check_poses
-from psorr.pose_clusters import share_out
+from psorr.pose_clusters import same_pose, share_out
 from psorr.ppf import scene_oriented_points
 from psorr.recognize_params import METHODS, Recognition, RecognitionStats, RecognizeParams
 from psorr.single_cylinder import SingleCylinderMatcher
@@ -284,14 +284,17 @@ class Recognizer:
         scored.sort(key=lambda s: -s[0])
         if claims is None:
             claims = PixelClaims(view.n_blocks, p.max_shared_pixels)
-        detections = []
+        detections, resolved_from = [], []  # the poses resolved here, as found: (model, T)
         for score, model, T, check in scored:
             displaced, detection = claims.rivals(check.supported_blocks, score), None
-            if displaced is None and self._resolvers[model.name].has_broad_twins:
-                # Settled by the pose as found, a part's twin pose (an L bracket with its legs swapped) kept
-                # the pixels from a candidate that its near-symmetries take to the true pose: a second
-                # chance, judged at the pose they give. Only for the losers of parts whose twins the point
-                # check tells apart: a chassis' twin, turned end for end, scored 0.808 to the true 0.800.
+            if (displaced is None and self._resolvers[model.name].has_broad_twins
+                    and not any(m is model and same_pose(model.points[::50], T, R, 0.05 * model.diameter)
+                            for m, R in resolved_from)):
+                # A twin pose (an L bracket's legs swapped) that one candidate resolved to kept the pixels from
+                # one its near-symmetries take to the true pose: a second chance, at the pose they give. Only
+                # for parts whose twins the point check tells apart (a chassis turned end for end scored 0.808
+                # to the true 0.800), and not for a copy of a pose already resolved, which resolves alike.
+                resolved_from.append((model, T))
                 detection = self._resolved(view, model, T)
                 check = check_pose(view, model.points, model.normals, detection.T_cloud_model, p.check)
                 score = check.score
@@ -300,7 +303,9 @@ class Recognizer:
                 continue
             # Only now, on the few survivors, is a dense check affordable: it tells a part from its
             # near-symmetric twin pose (a tray turned end for end) by the small features.
-            detection = detection or self._resolved(view, model, T)
+            if detection is None:
+                resolved_from.append((model, T))
+                detection = self._resolved(view, model, T)
             if self._on_larger_object(view, model, detection.T_cloud_model):
                 continue
             claims.add(detection, check.supported_blocks, score, displaced)

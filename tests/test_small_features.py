@@ -7,7 +7,7 @@ from scipy.spatial.transform import Rotation
 from psorr import shapes
 from psorr.decomposition import DecomposeParams, decompose
 from psorr.decomposition.detail import decompose_leftovers
-from psorr.pose_clusters import densest_poses
+from psorr.pose_clusters import densest_poses, same_pose
 from psorr.ppf import HashParams, PairTable
 from psorr.scenes import workpiece_scene
 from psorr.types import PrimitiveKind
@@ -121,3 +121,14 @@ def test_a_cylinder_matches_only_its_own_radius_and_never_a_face():
     assert not own[outer, bore] and not own[bore, outer]
     planes = [k for k, p in enumerate(bushing.graph.primitives) if p.kind is PrimitiveKind.PLANE]
     assert not own[np.ix_(planes, [outer, bore])].any()  # a face is never a cylinder
+
+
+def test_same_pose_measures_how_far_apart_two_poses_place_the_points():
+    points = np.array([[0.05, 0.0, 0.0], [-0.05, 0.0, 0.0], [0.0, 0.03, 0.0]])
+    A = np.eye(4)
+    shifted = np.eye(4)
+    shifted[:3, 3] = [0.0, 0.0, 0.004]  # every point 4 mm away
+    turned = np.eye(4)
+    turned[:3, :3] = Rotation.from_euler("z", 180, degrees=True).as_matrix()  # 0.1, 0.1 and 0.06 m away
+    assert same_pose(points, A, shifted, 0.005) and not same_pose(points, A, shifted, 0.003)
+    assert not same_pose(points, A, turned, 0.05) and same_pose(points, A, turned, 0.09)
