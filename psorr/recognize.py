@@ -286,7 +286,7 @@ class Recognizer:
             claims = PixelClaims(view.n_blocks, p.max_shared_pixels)
         detections, resolved_from = [], []  # the poses resolved here, as found: (model, T)
         for score, model, T, check in scored:
-            displaced, detection = claims.rivals(check.supported_blocks, score), None
+            displaced, detection = claims.rivals(check.supported_blocks, score, 1 - check.violation_ratio), None
             if (displaced is None and self._resolvers[model.name].has_broad_twins
                     and not any(m is model and same_pose(model.points[::50], T, R, 0.05 * model.diameter)
                             for m, R in resolved_from)):
@@ -298,7 +298,7 @@ class Recognizer:
                 detection = self._resolved(view, model, T)
                 check = check_pose(view, model.points, model.normals, detection.T_cloud_model, p.check)
                 score = check.score
-                displaced = claims.rivals(check.supported_blocks, score)
+                displaced = claims.rivals(check.supported_blocks, score, 1 - check.violation_ratio)
             if displaced is None:
                 continue
             # Only now, on the few survivors, is a dense check affordable: it tells a part from its
@@ -308,7 +308,7 @@ class Recognizer:
                 detection = self._resolved(view, model, T)
             if self._on_larger_object(view, model, detection.T_cloud_model):
                 continue
-            claims.add(detection, check.supported_blocks, score, displaced)
+            claims.add(detection, check.supported_blocks, score, displaced, 1 - check.violation_ratio)
             detections.append(detection)
         standing = {id(d) for d in claims.detections}  # a later candidate here may have displaced an earlier one
         return [d for d in detections if id(d) in standing], claims

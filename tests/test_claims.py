@@ -62,3 +62,24 @@ def test_a_candidate_that_covers_a_detection_conflicts_with_it():
     chassis = _detection("chassis", 0.3)
     claims.add(chassis, np.arange(0, 60), 0.3, [0])
     assert claims.detections == [chassis]
+
+
+def test_a_clean_candidate_that_explains_clearly_more_displaces_what_it_covers():
+    # A chassis 37% in view under an arm scores by what it shows (0.36) but is clean (0.97 of its checked
+    # points not seen through); a bracket posed on it scored 0.70, 0.87 clean. By score, and by score
+    # times blocks (0.70 x 99 = 69 against 0.36 x 139 = 50), the bracket kept it out.
+    claims = PixelClaims(300, max_shared=0.3)
+    bracket = _detection("bracket", 0.70)
+    claims.add(bracket, np.arange(0, 99), 0.70, [], clean=0.87)
+    chassis_blocks = np.arange(34, 173)  # 139 blocks, 65 of them the bracket's
+    assert claims.rivals(chassis_blocks, 0.36) is None  # no cleanliness given: judged by score as before
+    assert claims.rivals(chassis_blocks, 0.36, clean=0.97) == [0]  # 135 clean blocks' worth against 86
+    # Not clearly more (under 1.25 times the bracket's 86): the bracket stays.
+    assert claims.rivals(np.arange(34, 133), 0.36, clean=0.97) is None  # 96 against 86
+
+
+def test_a_near_tie_in_clean_blocks_is_settled_by_score():
+    # Two poses of one part, nearly the same blocks and both clean: the better scored one, found first, stays.
+    claims = PixelClaims(300, max_shared=0.3)
+    claims.add(_detection("u_channel", 0.644), np.arange(0, 149), 0.644, [], clean=0.962)
+    assert claims.rivals(np.arange(3, 157), 0.625, clean=0.938) is None
