@@ -89,3 +89,13 @@ def continued_share(view: SceneView, model_points: np.ndarray, model_normals: np
     if view.support_plane is not None:
         on_face &= q @ view.support_plane[:3] + view.support_plane[3] > params.off_support
     return float(on_face.mean())
+
+
+def on_larger_object(view: SceneView, model_points: np.ndarray, model_normals: np.ndarray, T_cloud_model: np.ndarray,
+                     max_continued: float | None, params: ContinuationParams) -> bool:
+    """Does the measured surface go on past the pose's outline, in its faces' planes, on more than
+    ``max_continued`` of the ring (:func:`continued_share`)? An L bracket in a box's corner passes every check on
+    the surface it would show; the box's faces beyond its legs do not. Never, with max_continued None.
+    1-5 ms a pose: recognition asks it only of the candidates it would accept."""
+    return max_continued is not None and continued_share(
+        view, model_points, model_normals, T_cloud_model, params) > max_continued

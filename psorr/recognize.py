@@ -28,7 +28,7 @@ from psorr import param_checks as check
 from psorr.ambiguity import NearSymmetryResolver
 from psorr.claims import PixelClaims, SearchTally
 from psorr.cloud_checks import require_seen_from_origin
-from psorr.continuation import continued_share
+from psorr.continuation import on_larger_object
 from psorr.decomposition import decompose
 from psorr.decomposition.detail import decompose_leftovers
 from psorr.errors import InvalidInputError
@@ -41,7 +41,7 @@ from psorr.ppf import scene_oriented_points
 from psorr.recognize_params import METHODS, Recognition, RecognitionStats, RecognizeParams
 from psorr.single_cylinder import SingleCylinderMatcher
 from psorr.single_plane import SinglePlaneMatcher
-from psorr.support_crop import crop_to_parts
+from psorr.support_crop import crop_to_parts, floats_above
 from psorr.types import Detection, PointCloud, PrimitiveKind, random_generator
 from psorr.unexplained import blanked, on_detected_surface, part_sized, standing_points, standing_unexplained
 from psorr.verify import SceneView, refine_icp
@@ -222,25 +222,6 @@ class Recognizer:
         _, tally.claims = self._accept(view, [(models[k], poses[k]) for k in order], tally.claims, beyond)
         tally.add(len(poses), ms)
 
-    def _floats(self, view, model, T_cloud_model) -> bool:
-        """Is the model's lowest point more than max_float above the supporting plane? Parts rest on the
-        table: a plate can lie on an arm reaching across the view, within the depth tolerance of its 35 mm
-        radius over most of its width, and no check on the measured surface tells it from a real one.
-        Stacked parts need max_float=None."""
-        if self.params.max_float is None or view.support_plane is None:
-            return False
-        plane = view.support_plane
-        lowest = (model.points[::4] @ T_cloud_model[:3, :3].T + T_cloud_model[:3, 3]) @ plane[:3] + plane[3]
-        return bool(lowest.min() > self.params.max_float)
-
-    def _on_larger_object(self, view, model, T_cloud_model) -> bool:
-        """Does the measured surface go on past the pose's outline, in its faces' planes? An L bracket in a
-        box's corner passes every check on the surface it would show; the box's faces beyond its legs do not.
-        Judged only for the candidates that would be accepted (1-5 ms each)."""
-        p = self.params
-        return p.max_continued is not None and continued_share(
-            view, model.points, model.normals, T_cloud_model, p.continuation) > p.max_continued
-
     def _on_detected_surface(self, detections, points: np.ndarray, share: float = 0.5) -> bool:
         """Does at least ``share`` of ``points`` (M, 3), a primitive's, lie on the surface of one of ``detections``
         (within half the ICP distance of its model's samples)? The whole surface, not the pixels it covers: a
@@ -278,7 +259,7 @@ class Recognizer:
             enough_support = (check.n_support >= p.min_support
                               and check.n_support_above_table >= p.min_support_above_table)
             if (enough_support and seen_enough and check.violation_ratio <= p.max_violation_ratio
-                    and not self._floats(view, model, T)
+                    and not floats_above(view.support_plane, model.points[::4], T, p.max_float)
                     and (beyond is None or beyond.seen_beyond(view, model_index, T, p.check, p.max_violation_ratio))):
                 scored.append((check.score, model, T, check))
         scored.sort(key=lambda s: -s[0])
@@ -306,7 +287,8 @@ class Recognizer:
             if detection is None:
                 resolved_from.append((model, T))
                 detection = self._resolved(view, model, T)
-            if self._on_larger_object(view, model, detection.T_cloud_model):
+            if on_larger_object(view, model.points, model.normals, detection.T_cloud_model, p.max_continued,
+                                p.continuation):
                 continue
             claims.add(detection, check.supported_blocks, score, displaced, 1 - check.violation_ratio)
             detections.append(detection)

@@ -60,16 +60,18 @@ def part_sized(cloud: PointCloud, plane: np.ndarray | None, mask: np.ndarray, la
 
     Connected in height too, not only along the plane: an arm held over a part covers it in a view
     from above, and grouped by their footprints the two were one group, too wide, and the part went
-    with the arm (a circuit board 79% in view, its ICs 5 cm below a forearm, never had its second look).
+    with the arm (a circuit board 79% in view, its components below a forearm, never had its second look).
     """
     if plane is None or not mask.any():
         return mask
     along, height = along_plane(cloud.points[mask], plane)
     group = _connected_cells(np.floor(np.column_stack([along, height]) / cell).astype(np.int64))
-    wide = np.zeros(group.max() + 1, dtype=bool)
-    for g in np.unique(group):
-        mine = group == g
-        wide[g] = np.linalg.norm(np.ptp(along[mine], axis=0)) > largest or height[mine].max() > largest
+    n = group.max() + 1
+    low, high, top = np.full((n, 2), np.inf), np.full((n, 2), -np.inf), np.full(n, -np.inf)
+    np.minimum.at(low, group, along)
+    np.maximum.at(high, group, along)
+    np.maximum.at(top, group, height)
+    wide = (np.linalg.norm(high - low, axis=1) > largest) | (top > largest)
     out = mask.copy()
     out[np.flatnonzero(mask)[wide[group]]] = False
     return out
