@@ -87,9 +87,9 @@ def _connected_cells(cells: np.ndarray) -> np.ndarray:
     steps = steps[:13]  # one of each pair of opposite neighbours: edges are undirected
     first, second = [], []
     for di, dj, dk in steps:
-        at = np.searchsorted(keys, keys + (di * dims[1] + dj) * dims[2] + dk)
-        at = np.minimum(at, len(keys) - 1)
-        hit = keys[at] == keys + (di * dims[1] + dj) * dims[2] + dk
+        neighbour = keys + (di * dims[1] + dj) * dims[2] + dk
+        at = np.minimum(np.searchsorted(keys, neighbour), len(keys) - 1)
+        hit = keys[at] == neighbour
         first.append(np.flatnonzero(hit))
         second.append(at[hit])
     first, second = np.concatenate(first), np.concatenate(second)
