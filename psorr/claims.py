@@ -50,7 +50,7 @@ class PixelClaims:
         share of its checked points not seen through; its score when None) must displace: [] if it
         conflicts with none, None if it loses to one of them."""
         blocks = np.unique(blocks)
-        weight = (score if clean is None else clean) * len(blocks)
+        weight = _weight(score, clean, len(blocks))
         held = self.owner[blocks]
         held = held[held >= 0]
         covered = np.zeros(len(self.owner), dtype=bool)
@@ -64,32 +64,37 @@ class PixelClaims:
                 if remaining <= self.max_shared * len(blocks):
                     break
                 rival = int(owners[k])
-                if not (self._entries[rival][0] < score or self._explains_clearly_more(rival, covered, weight)):
+                if not (self._entries[rival][0] < score
+                        or self._covers(rival, covered) and self._explains_clearly_more(rival, weight)):
                     return None
                 displaced.append(rival)
                 remaining -= counts[k]
         for rival, entry in enumerate(self._entries):
             if entry is None or rival in displaced:
                 continue
-            own = self._blocks[rival]
-            if covered[own].sum() > self.max_shared * len(own):
+            if self._covers(rival, covered):
+                own = self._blocks[rival]
                 # The candidate explains much of what the rival does, and maybe more: the one that explains
                 # more, blocks weighted by score, stays. By score alone a bracket posed on a chassis' wall
                 # (0.71 of it seen, 57 blocks) dropped the true chassis (0.48, 180 blocks) in a 1280x720 view.
                 explains_more = entry[0] * len(own) < score * len(blocks)
-                if not (explains_more or self._explains_clearly_more(rival, covered, weight)):
+                if not (explains_more or self._explains_clearly_more(rival, weight)):
                     return None
                 displaced.append(rival)
         return displaced
 
-    def _explains_clearly_more(self, rival: int, covered: np.ndarray, weight: float) -> bool:
-        """Do the ``covered`` blocks hold more than ``max_shared`` of the rival's own, and does their ``weight``
-        (blocks times how clean the candidate is) exceed the rival's by _CLEARLY_MORE? Scored by what it shows,
+    def _covers(self, rival: int, covered: np.ndarray) -> bool:
+        """Do the ``covered`` blocks (a candidate's) hold more than ``max_shared`` of the rival's own?"""
+        own = self._blocks[rival]
+        return covered[own].sum() > self.max_shared * len(own)
+
+    def _explains_clearly_more(self, rival: int, weight: float) -> bool:
+        """Does a candidate covering the rival (:meth:`_covers`), with ``weight`` (blocks times how clean it is),
+        exceed the rival's weight by _CLEARLY_MORE? Scored by what it shows,
         a chassis 37% in view under an arm (0.36; but 0.97 of what the sensor could see of it is measured,
         0.03 seen through, 139 blocks) lost to the two brackets posed on it (0.70 and 0.73, 0.87-0.89 clean,
         99 and 91 blocks), by score and by score times blocks alike."""
-        own = self._blocks[rival]
-        return covered[own].sum() > self.max_shared * len(own) and weight > _CLEARLY_MORE * self._entries[rival][2]
+        return weight > _CLEARLY_MORE * self._entries[rival][2]
 
     def add(self, detection: Detection, blocks: np.ndarray, score: float, displaced: list[int],
             clean: float | None = None) -> None:
@@ -100,7 +105,7 @@ class PixelClaims:
             self._entries[rival] = None
         index = len(self._entries)
         self._blocks.append(np.unique(blocks))
-        self._entries.append((score, detection, (score if clean is None else clean) * len(self._blocks[-1])))
+        self._entries.append((score, detection, _weight(score, clean, len(self._blocks[-1]))))
         free = blocks[self.owner[blocks] < 0]
         self.owner[free] = index
 
@@ -121,3 +126,8 @@ class SearchTally:
     def add(self, hypotheses: int, verify_ms: float) -> None:
         self.hypotheses += hypotheses
         self.verify_ms += verify_ms
+
+
+def _weight(score: float, clean: float | None, n_blocks: int) -> float:
+    """Blocks weighted by how clean a pose is (its score when ``clean`` is None): what it explains."""
+    return (score if clean is None else clean) * n_blocks
