@@ -9,6 +9,8 @@ edited or foreign file is refused with its name rather than failing later deep i
 from __future__ import annotations
 
 import json
+import os
+import uuid
 import zipfile
 from dataclasses import asdict, fields, is_dataclass
 
@@ -41,9 +43,18 @@ def save_models(path, models, params=None):
     # Settings may hold numpy numbers (np.int64(4) is a valid pair_points), which json does not know.
     arrays["meta"] = np.frombuffer(json.dumps(meta, default=_plain).encode(), dtype=np.uint8)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp.npz")
-    np.savez_compressed(tmp, **arrays)
-    tmp.replace(path)
+    # A temporary name of this writer's own: two processes training one mesh at once (two test workers,
+    # two users of one cache) each replace the file whole, where a shared name had one move the
+    # other's half-written file, or find it gone.
+    # (Not mkstemp: its files are private to the user, and a saved library should get the usual mode.)
+    tmp = path.with_name(f"{path.name}.{uuid.uuid4().hex}.tmp")
+    try:
+        with open(tmp, "xb") as f:
+            np.savez_compressed(f, **arrays)
+        os.replace(tmp, path)
+    except BaseException:
+        os.unlink(tmp)
+        raise
     return path
 
 

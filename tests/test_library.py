@@ -59,6 +59,29 @@ def test_library_saves_loads_and_caches(tmp_path, monkeypatch):
     assert np.array_equal(cached.table.keys, lib.table.keys)
 
 
+def test_two_writers_of_one_cache_file_both_succeed(tmp_path, monkeypatch):
+    # Two processes training one mesh into one cache: the second finishes while the first is between
+    # writing its file and moving it into place. With one shared temporary name, the second moved the
+    # first's file away and the first failed with FileNotFoundError.
+    from psorr import library_file
+
+    lib = ModelLibrary.from_meshes([MESHES / "u_channel.stl"])
+    target = tmp_path / "written" / "u_channel.npz"
+    real_savez, nested = np.savez_compressed, []
+
+    def savez_then_other_writer(file, **arrays):
+        real_savez(file, **arrays)
+        if not nested:
+            nested.append(True)
+            library_file.save_models(target, lib.models)
+
+    monkeypatch.setattr(library_file.np, "savez_compressed", savez_then_other_writer)
+    library_file.save_models(target, lib.models)
+    monkeypatch.undo()
+    assert nested and ModelLibrary.load(target).names == ["u_channel"]
+    assert [p.name for p in target.parent.iterdir()] == ["u_channel.npz"]  # no temporary left behind
+
+
 def test_implausible_size_needs_units(tmp_path):
     mesh = trimesh.creation.box(extents=(100.0, 60.0, 40.0))  # millimetres
     path = tmp_path / "block.stl"
