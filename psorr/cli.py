@@ -6,6 +6,7 @@ import argparse
 import json
 import sys
 import tempfile
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -197,8 +198,15 @@ def at_least_one(text: str) -> int:
 def run_parsed(parser: argparse.ArgumentParser, argv: list[str] | None) -> int:
     """Run the chosen subcommand; a PsorrError becomes one line on stderr and exit status 2."""
     args = parser.parse_args(argv)
+
+    def one_line(message, category, filename, lineno, file=None, line=None):
+        # A warning for the user (an unwritable cache), not a source line of ours to read.
+        print(f"{parser.prog} {args.command}: warning: {message}", file=sys.stderr)
+
     try:
-        return args.run(args)
+        with warnings.catch_warnings():
+            warnings.showwarning = one_line
+            return args.run(args)
     except PsorrError as exc:
         print(f"{parser.prog} {args.command}: error: {exc}", file=sys.stderr)
         return 2

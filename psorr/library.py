@@ -14,6 +14,7 @@ import json
 import os
 import sys
 import time
+import warnings
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -222,7 +223,7 @@ class ModelLibrary:
                 raise InvalidInputError(f"{twin} and {path} would both be the model {path.stem!r} (a model is named "
                                         "by its file stem): pass each mesh once, or rename one of two different ones")
         start = time.perf_counter()
-        models = []
+        models, cache_failed = [], False
         for path in (progress(paths) if progress else paths):
             if path.is_dir():
                 raise CloudFileError(path, "is a folder", "pass its mesh files (psorr recognize also takes folders)")
@@ -239,8 +240,14 @@ class ModelLibrary:
                     pass
             model = train_model(path.stem, load_mesh_in_metres(path, units), params, sha)
             models.append(model)
-            if use_cache:
-                save_models(cached, [model])
+            if use_cache and not cache_failed:
+                try:
+                    save_models(cached, [model])
+                except OSError as exc:  # training stands; only the next run's shortcut is lost
+                    cache_failed = True
+                    warnings.warn(f"cannot write the training cache {cached.parent} ({exc.strerror or exc}): these "
+                                  "models will be trained again next time; set PSORR_CACHE to a writable folder, "
+                                  "or pass use_cache=False", stacklevel=2)
         return cls.build(models, params, (time.perf_counter() - start) * 1e3)
 
     def save(self, path) -> Path:

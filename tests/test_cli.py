@@ -82,6 +82,24 @@ def test_recognize_reads_the_scene_before_it_trains_models(tmp_path):
     assert "missing.pcd" in out.stderr and "training" not in out.stderr and "not_a_mesh" not in out.stderr
 
 
+def test_an_unwritable_cache_is_one_warning_line_and_recognition_runs(tmp_path):
+    import os
+
+    from psorr.workpieces import DEFAULT_CATALOG
+
+    scene = synthetic.box_on_table(np.random.default_rng(0))
+    write_cloud(tmp_path / "scene.ply", scene.cloud)
+    (tmp_path / "a_file").write_text("no folder can be made under a file")
+    env = dict(os.environ, PSORR_CACHE=str(tmp_path / "a_file" / "cache"))
+    out = subprocess.run([sys.executable, "-m", "psorr.cli", "recognize", str(DEFAULT_CATALOG.parent / "meshes" /
+                          "bushing.stl"), str(tmp_path / "scene.ply"), "--json"], capture_output=True, text=True,
+                         timeout=120, env=env)
+    assert out.returncode == 0, out.stderr
+    assert "Traceback" not in out.stderr and "library.py" not in out.stderr
+    assert "psorr recognize: warning: cannot write the training cache" in out.stderr
+    assert set(json.loads(out.stdout)) == {"detections", "stats"}
+
+
 def test_a_cloud_in_millimetres_is_refused_with_the_fix(tmp_path):
     scene = synthetic.box_on_table(np.random.default_rng(0))
     path = tmp_path / "scene_mm.ply"

@@ -82,6 +82,15 @@ def test_two_writers_of_one_cache_file_both_succeed(tmp_path, monkeypatch):
     assert [p.name for p in target.parent.iterdir()] == ["u_channel.npz"]  # no temporary left behind
 
 
+def test_an_unwritable_cache_warns_and_training_still_succeeds(tmp_path, monkeypatch):
+    blocker = tmp_path / "a_file"
+    blocker.write_text("the cache folder cannot be made under a file")
+    monkeypatch.setenv("PSORR_CACHE", str(blocker / "cache"))
+    with pytest.warns(UserWarning, match=r"cannot write the training cache .*a_file.*set PSORR_CACHE"):
+        lib = ModelLibrary.from_meshes([MESHES / "u_channel.stl", MESHES / "bushing.stl"])
+    assert lib.names == ["u_channel", "bushing"] and len(lib.table) > 1000
+
+
 def test_implausible_size_needs_units(tmp_path):
     mesh = trimesh.creation.box(extents=(100.0, 60.0, 40.0))  # millimetres
     path = tmp_path / "block.stl"
