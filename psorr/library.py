@@ -4,7 +4,8 @@ every pair of distinct primitives (the paper samples pairs this way so that a
 partial view still finds its pairs).
 
 A library saves to one .npz file. Training is cached under the user's cache
-directory, keyed by a hash of the mesh bytes, units and training settings.
+directory (psorr.training_cache), keyed by the mesh bytes, units, training
+settings and the code that trains.
 """
 
 from __future__ import annotations
@@ -14,7 +15,6 @@ import json
 import os
 import sys
 import time
-import warnings
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -26,19 +26,13 @@ from psorr import param_checks as check
 from psorr.decomposition import DecomposeParams, decompose
 from psorr.errors import CloudFileError, InvalidInputError
 from psorr.io import read_mesh
-from psorr.library_file import FORMAT_VERSION, load_models, save_models
+from psorr.library_file import load_models, save_models
 from psorr.ppf import HashParams, PairTable
+from psorr.training_cache import cache_dir, entry_path, load_entry, store_entry
 from psorr.types import PointCloud, PrimitiveKind, PrimitiveShapeGraph
 
 MESH_SUFFIXES = (".stl", ".obj", ".ply")
 UNITS = {"m": 1.0, "mm": 0.001}
-
-
-def cache_dir() -> Path:
-    """$PSORR_CACHE, else $XDG_CACHE_HOME/psorr, else ~/.cache/psorr."""
-    if os.environ.get("PSORR_CACHE"):
-        return Path(os.environ["PSORR_CACHE"])
-    return Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "psorr"
 
 
 @dataclass(frozen=True)
@@ -223,31 +217,19 @@ class ModelLibrary:
                 raise InvalidInputError(f"{twin} and {path} would both be the model {path.stem!r} (a model is named "
                                         "by its file stem): pass each mesh once, or rename one of two different ones")
         start = time.perf_counter()
-        models, cache_failed = [], False
+        models = []
         for path in (progress(paths) if progress else paths):
             if path.is_dir():
                 raise CloudFileError(path, "is a folder", "pass its mesh files (psorr recognize also takes folders)")
             if not path.is_file():
                 raise CloudFileError(path, "no such mesh file", "check the path")
             sha = hashlib.sha256(path.read_bytes()).hexdigest()
-            key = hashlib.sha256(f"{sha}|{units}|{params.fingerprint()}|{FORMAT_VERSION}".encode()).hexdigest()[:24]
-            cached = cache_dir() / f"{path.stem}-{key}.npz"
-            if use_cache and cached.is_file():
-                try:
-                    models.append(load_models(cached, Model, TrainParams)[0][0])
-                    continue
-                except Exception:  # noqa: BLE001  a stale or torn cache entry is retrained, not fatal
-                    pass
-            model = train_model(path.stem, load_mesh_in_metres(path, units), params, sha)
+            cached = entry_path(path.stem, sha, units, params.fingerprint())
+            model = load_entry(cached, Model, TrainParams) if use_cache else None
+            if model is None:
+                model = train_model(path.stem, load_mesh_in_metres(path, units), params, sha)
+                use_cache = use_cache and store_entry(cached, model)  # one warning, not one per mesh
             models.append(model)
-            if use_cache and not cache_failed:
-                try:
-                    save_models(cached, [model])
-                except OSError as exc:  # training stands; only the next run's shortcut is lost
-                    cache_failed = True
-                    warnings.warn(f"cannot write the training cache {cached.parent} ({exc.strerror or exc}): these "
-                                  "models will be trained again next time; set PSORR_CACHE to a writable folder, "
-                                  "or pass use_cache=False", stacklevel=2)
         return cls.build(models, params, (time.perf_counter() - start) * 1e3)
 
     def save(self, path) -> Path:

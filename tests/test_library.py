@@ -59,6 +59,22 @@ def test_library_saves_loads_and_caches(tmp_path, monkeypatch):
     assert np.array_equal(cached.table.keys, lib.table.keys)
 
 
+def test_a_model_cached_by_other_training_code_is_trained_again(monkeypatch):
+    # An upgrade that changes training (the decomposition, say) must not reuse the models the old code made.
+    from psorr import training_cache
+
+    paths = [MESHES / "u_channel.stl"]
+    ModelLibrary.from_meshes(paths)
+    trained = []
+    real_train = library_module.train_model
+    monkeypatch.setattr(library_module, "train_model", lambda *a, **k: trained.append(a[0]) or real_train(*a, **k))
+    ModelLibrary.from_meshes(paths)
+    assert trained == []  # same code: from the cache
+    monkeypatch.setattr(training_cache, "code_fingerprint", lambda: "other code")
+    ModelLibrary.from_meshes(paths)
+    assert trained == ["u_channel"]
+
+
 def test_two_writers_of_one_cache_file_both_succeed(tmp_path, monkeypatch):
     # Two processes training one mesh into one cache: the second finishes while the first is between
     # writing its file and moving it into place. With one shared temporary name, the second moved the
