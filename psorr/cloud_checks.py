@@ -12,6 +12,7 @@ from psorr.errors import InvalidInputError
 from psorr.types import PointCloud
 
 SENSOR_RANGE_LIMIT = 25.0  # m: beyond any Kinect-class sensor's reach (about 10 m)
+STRAY_LIMIT = 1000.0  # m: no single point of a depth sensor's lies this far
 MAX_VIEW_SLOPE = 4.0  # |x| / z or |y| / z: a 152 degree view, wider than depth sensors' (a Kinect's is 57 x 43)
 
 
@@ -33,6 +34,16 @@ def _require_metres(finite: np.ndarray, what: str) -> None:
     sample = _spread(finite)
     if len(sample) == 0:
         return
+    # Single stray values too, which the median lets through: one point 10 km off made a crop grid of
+    # 22 GiB, and at 10,000 km Open3D refuses to downsample.
+    far = np.flatnonzero((np.abs(finite) > STRAY_LIMIT).any(axis=1))
+    if len(far):
+        worst = far[np.argmax(np.abs(finite[far]).max(axis=1))]
+        at = ", ".join(f"{c:.4g}" for c in finite[worst])
+        raise InvalidInputError(
+            f"{what}: {len(far)} of its {len(finite)} finite points lie more than {STRAY_LIMIT:.0f} m from the "
+            f"sensor along an axis (the farthest at ({at}) m); no depth sensor measures that far, so these are "
+            "corrupt values: mark them NaN (no measurement) and run again")
     median = float(np.median(np.linalg.norm(sample, axis=1)))
     if median > SENSOR_RANGE_LIMIT:
         raise InvalidInputError(
@@ -52,6 +63,11 @@ def require_seen_from_origin(cloud: PointCloud, what: str) -> None:
     behind = int(np.count_nonzero(finite[:, 2] <= 0))
     fix = ("psorr takes clouds in the sensor's frame, OpenCV axes: x right, y down, z forward from the sensor; "
            "one in a world frame: move it into the camera's; one with z towards the sensor: negate y and z")
+    zeros = int(np.count_nonzero((finite == 0.0).all(axis=1)))
+    if zeros:  # RealSense, Azure Kinect and ROS exports write a pixel without depth so
+        raise InvalidInputError(f"{what}: {zeros} of its {len(finite)} finite points are exactly (0, 0, 0), which "
+                                "depth sensors and their drivers write for pixels without a measurement; mark "
+                                "them NaN (no measurement) and run again")
     if behind:
         raise InvalidInputError(f"{what}: {behind} of its {len(finite)} finite points lie at z <= 0, behind the "
                                 f"sensor; {fix}")

@@ -15,10 +15,13 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.ndimage import binary_dilation
+from scipy.spatial import cKDTree
 
 from psorr import param_checks as check
 from psorr.boxes import orthonormal_frame
 from psorr.types import PointCloud
+
+_MAX_GRID_CELLS = 20_000_000  # 20 MB of bools: a 1 cm grid 44 m square
 
 
 @dataclass(frozen=True)
@@ -60,17 +63,34 @@ def crop_to_parts(cloud: PointCloud, plane: np.ndarray | None, margin: float,
     # Column by column: a reduction over axis 0 of an (N, 2) array took 5-7 ms on a 640x480 cloud.
     lowest = np.array([along[:, 0].min(), along[:, 1].min()])
     cells = np.floor((along - lowest) / params.cell).astype(np.int64)
-    occupied = np.zeros((cells[:, 0].max() + 1, cells[:, 1].max() + 1), dtype=bool)
-    occupied[cells[off, 0], cells[off, 1]] = True
     reach = int(np.ceil(margin / params.cell)) + 1  # one cell more: a point may sit anywhere in its cell
-    ring = np.hypot(*np.mgrid[-reach:reach + 1, -reach:reach + 1]) <= reach
-    near = binary_dilation(occupied, structure=ring)
-    far = below | (~off & ~near[cells[:, 0], cells[:, 1]])
+    far = below | (~off & ~_near_cells(cells, off, reach))
     if not far.any():
         return cloud
     cropped = pts.copy()
     cropped[finite[far]] = np.nan
     return replace(cloud, points=cropped)
+
+
+def _near_cells(cells: np.ndarray, occupied: np.ndarray, reach: int) -> np.ndarray:
+    """(N,) bool: is each grid cell (N, 2) within ``reach`` cells (Euclidean) of a cell of the ``occupied`` (N,)
+    points? Dilated on a grid over the occupied cells' window, which is small for a table top; a stray point
+    metres away would make that grid gigabytes, and is looked up in a k-d tree of the occupied cells instead."""
+    hx, hy = cells[occupied, 0], cells[occupied, 1]  # columns: reductions over axis 0 are slow (see above)
+    x0, y0 = int(hx.min()) - reach, int(hy.min()) - reach
+    nx, ny = int(hx.max()) + reach + 1 - x0, int(hy.max()) + reach + 1 - y0
+    if nx * ny > _MAX_GRID_CELLS:
+        tree = cKDTree(np.unique(np.column_stack([hx, hy]), axis=0))
+        return np.isfinite(tree.query(cells, distance_upper_bound=reach + 1e-6)[0])
+    grid = np.zeros((nx, ny), dtype=bool)
+    grid[hx - x0, hy - y0] = True
+    ring = np.hypot(*np.mgrid[-reach:reach + 1, -reach:reach + 1]) <= reach
+    grid = binary_dilation(grid, structure=ring)
+    x, y = cells[:, 0] - x0, cells[:, 1] - y0
+    inside = np.flatnonzero((x >= 0) & (x < nx) & (y >= 0) & (y < ny))
+    near = np.zeros(len(cells), dtype=bool)
+    near[inside] = grid[x[inside], y[inside]]
+    return near
 
 
 def floats_above(plane: np.ndarray | None, model_points: np.ndarray, T_cloud_model: np.ndarray,

@@ -176,3 +176,19 @@ def test_rng_must_be_a_generator_and_the_error_says_how_to_make_one(bad):
     scene = synthetic.box_on_table(np.random.default_rng(0))
     with pytest.raises(InvalidInputError, match=r"decompose\(\) takes rng=np.random.default_rng"):
         decompose(scene.cloud, rng=bad)
+
+
+def test_voxels_survive_a_stray_point_and_a_tiny_voxel():
+    # Far points and tiny voxels made the flat voxel key overflow int64 ("'minlength' must not be negative").
+    from psorr.decomposition.preprocess import voxel_downsample
+
+    rng = np.random.default_rng(0)
+    points = rng.uniform(0, 0.1, (500, 3)) + [0, 0, 1]
+    centroids, voxel_of = voxel_downsample(points, 0.01)
+    stray = np.vstack([points, [[3e4, -2e4, 5e4]]])
+    far_centroids, far_voxel_of = voxel_downsample(stray, 0.01)
+    assert len(far_centroids) == len(centroids) + 1 and np.allclose(far_centroids[far_voxel_of[-1]], stray[-1])
+    # Same grouping as without the stray point.
+    assert len(np.unique(np.column_stack([voxel_of, far_voxel_of[:-1]]), axis=0)) == len(centroids)
+    tiny_centroids, tiny_voxel_of = voxel_downsample(points, 1e-9)  # one voxel per point
+    assert len(tiny_centroids) == len(points) and np.allclose(tiny_centroids[tiny_voxel_of], points)

@@ -40,3 +40,19 @@ def test_points_behind_the_sensor_or_too_wide_a_view_are_refused():
     grazing = FRONT * [1.0, 1.0, 0.01]  # 30 cm wide at 1 cm: a world-frame table seen edge-on
     with pytest.raises(InvalidInputError, match="wider than any depth sensor's"):
         require_seen_from_origin(PointCloud(grazing), "scene.npy")
+
+
+def test_a_single_stray_point_far_beyond_any_sensor_is_named_not_crashed_on():
+    # One corrupt value 10 km off passed the median check and made a crop grid of 22 GiB.
+    stray = np.vstack([FRONT, [[5000.0, 5000.0, 1e4]]])
+    for check in (require_sensor_metres, require_seen_from_origin):
+        with pytest.raises(InvalidInputError, match=r"scene.npy: 1 of its 13 finite points lie more than 1000 m"
+                                                    r".*\(5000, 5000, 1e\+04\) m.*mark them NaN"):
+            check(PointCloud(stray), "scene.npy")
+    require_seen_from_origin(PointCloud(np.vstack([FRONT, [[300.0, 0.0, 900.0]]])), "ok")  # far, not absurd
+
+
+def test_missing_depth_written_as_zeros_is_named_with_the_fix():
+    zeros = np.vstack([FRONT, np.zeros((3, 3))])
+    with pytest.raises(InvalidInputError, match=r"3 of its 15 finite points are exactly \(0, 0, 0\).*mark them NaN"):
+        require_seen_from_origin(PointCloud(zeros), "scene.pcd")

@@ -56,3 +56,30 @@ def test_nothing_is_cropped_without_a_plane_or_when_disabled():
 def test_bad_crop_settings_are_refused():
     with pytest.raises(InvalidInputError, match="off_plane"):
         SupportCropParams(off_plane=0.0)
+
+
+@pytest.mark.parametrize("height", [0.0, 0.5])  # on the table's plane, and standing above it
+def test_a_stray_point_far_along_the_table_changes_nothing_else(height):
+    # The band was dilated on a grid over every point: one point 700 m off along both axes of the table
+    # made it 70,000 cells on a side (5 GB). Now the grid spans what stands on the table, and a stray
+    # point standing far off is looked up in a k-d tree instead.
+    scene = _scene(["bracket"], 2)
+    plane = SceneView(scene.cloud).support_plane
+    finite = np.flatnonzero(np.isfinite(scene.cloud.points).all(axis=1))
+    u = np.cross(plane[:3], [1.0, 0.0, 0.0])
+    u /= np.linalg.norm(u)
+    points = scene.cloud.points.copy()
+    points[finite[0]] += 700.0 * (u + np.cross(plane[:3], u)) + height * plane[:3]
+    expected = crop_to_parts(PointCloud(np.delete(scene.cloud.points, finite[0], axis=0)), plane, 0.09).points
+    got = crop_to_parts(PointCloud(points), plane, 0.09).points
+    np.testing.assert_array_equal(np.delete(got, finite[0], axis=0), expected)
+
+
+def test_the_k_d_tree_band_equals_the_grid_band(monkeypatch):
+    from psorr import support_crop
+
+    scene = _scene(["u_channel", "bushing"], 4)
+    plane = SceneView(scene.cloud).support_plane
+    on_grid = crop_to_parts(scene.cloud, plane, 0.09).points
+    monkeypatch.setattr(support_crop, "_MAX_GRID_CELLS", 0)
+    np.testing.assert_array_equal(crop_to_parts(scene.cloud, plane, 0.09).points, on_grid)

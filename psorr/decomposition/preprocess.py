@@ -3,6 +3,7 @@ normals oriented towards the sensor."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -52,20 +53,24 @@ def voxel_downsample(points: np.ndarray, voxel_size: float, normals: np.ndarray 
     keys = np.floor(points / voxel_size).astype(np.int64)
     keys -= column_min(keys)
     dims = column_max(keys) + 1
-    flat = (keys[:, 0] * dims[1] + keys[:, 1]) * dims[2] + keys[:, 2]
     if normals is not None:
         dominant = np.abs(normals).argmax(axis=1)
-        side = dominant * 2 + (normals[np.arange(len(normals)), dominant] > 0)
-        flat = flat * 6 + side
-        dims = dims * np.array([1, 1, 6])
-    n_cells = int(np.prod(dims))
-    if n_cells <= _DENSE_GRID_CELLS:
+        keys = np.column_stack([keys, dominant * 2 + (normals[np.arange(len(normals)), dominant] > 0)])
+        dims = np.r_[dims, 6]
+    n_cells = math.prod(int(d) for d in dims)  # Python ints: a stray far point or a tiny voxel overflows int64
+    if n_cells >= 2**62:
+        # No flat key fits in int64: the occupied cells are numbered by sorting their rows instead.
+        voxel_of = np.unique(keys, axis=0, return_inverse=True)[1].ravel()
+        m = int(voxel_of.max()) + 1
+    elif n_cells <= _DENSE_GRID_CELLS:
+        flat = _flat_keys(keys, dims)
         # Counting over a dense grid is linear; sorting the keys costs several times more.
         occupied = np.bincount(flat, minlength=n_cells) > 0
         cell_to_voxel = np.cumsum(occupied) - 1
         voxel_of = cell_to_voxel[flat]
         m = int(cell_to_voxel[-1]) + 1
     else:
+        flat = _flat_keys(keys, dims)
         order = np.argsort(flat)
         sorted_keys = flat[order]
         starts = np.r_[True, sorted_keys[1:] != sorted_keys[:-1]]
@@ -76,6 +81,14 @@ def voxel_downsample(points: np.ndarray, voxel_size: float, normals: np.ndarray 
     counts = np.bincount(voxel_of, minlength=m)
     centroids = np.column_stack([np.bincount(voxel_of, points[:, k], m) for k in range(3)])
     return centroids / counts[:, None], voxel_of
+
+
+def _flat_keys(keys: np.ndarray, dims: np.ndarray) -> np.ndarray:
+    """One int64 per row of cell coordinates (N, D) on a grid of ``dims`` (D,) cells (< 2**62 in all)."""
+    flat = keys[:, 0]
+    for k in range(1, len(dims)):
+        flat = flat * dims[k] + keys[:, k]
+    return flat
 
 
 def smallest_eigenpairs(cov: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
