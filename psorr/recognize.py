@@ -84,6 +84,8 @@ class Recognizer:
         require_seen_from_origin(cloud, "recognize(): the cloud")
         rng = random_generator(rng, "recognize()")
         start = time.perf_counter()
+        if not cloud.valid_mask.any():  # a frame the sensor measured nothing in (the arm over its lens): none here
+            return Recognition((), RecognitionStats(self.method, 0, 0.0, 0.0, 0.0, self.library.train_ms))
         view = SceneView(cloud)
         if self.method == "psorr":
             detections, n_hyp, verify_ms, decomposition_ms = self._psorr(cloud, view, rng)

@@ -214,6 +214,14 @@ def test_a_handful_of_points_gives_no_detection(library, method):
     assert Recognizer(library, method).recognize(PointCloud(points), np.random.default_rng(0)).detections == ()
 
 
+@pytest.mark.parametrize("method", ["psorr", "orr"])
+def test_a_frame_with_no_measurement_gives_no_detection(library, method):
+    # The person's arm over the lens: every pixel NaN. It failed inside numpy building the depth buffer.
+    blind = PointCloud(np.full((480 * 640, 3), np.nan), width=640, height=480)
+    result = Recognizer(library, method).recognize(blind, np.random.default_rng(0))
+    assert result.detections == () and result.stats.hypotheses == 0
+
+
 def test_a_cloud_in_millimetres_is_refused(library):
     scene = workpiece_scene(np.random.default_rng(0), {}, [])
     with pytest.raises(InvalidInputError, match=r"recognize\(\): the cloud: .* in metres"):
