@@ -70,6 +70,8 @@ def load_models(path, model_class, params_class):
     that is not such a file."""
     if not path.is_file():
         raise CloudFileError(path, "no such library file" if not path.exists() else "not a file", _FIX)
+    if path.stat().st_size == 0:
+        raise CloudFileError(path, "the file is empty (0 bytes)", _FIX)
     try:
         data = np.load(path, allow_pickle=False)
         if not isinstance(data, np.lib.npyio.NpzFile):
@@ -84,7 +86,7 @@ def load_models(path, model_class, params_class):
             models = [_model(data, i, m, model_class) for i, m in enumerate(_listed(meta))]
     except CloudFileError:
         raise
-    except (OSError, ValueError, KeyError, TypeError, IndexError, AttributeError, zipfile.BadZipFile,
+    except (OSError, EOFError, ValueError, KeyError, TypeError, IndexError, AttributeError, zipfile.BadZipFile,
             json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise CloudFileError(path, f"not a psorr model library ({exc.__class__.__name__}: {exc})", _FIX) from None
     names = [m.name for m in models]
