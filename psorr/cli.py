@@ -200,8 +200,11 @@ def run_parsed(parser: argparse.ArgumentParser, argv: list[str] | None) -> int:
     args = parser.parse_args(argv)
 
     def one_line(message, category, filename, lineno, file=None, line=None):
-        # A warning for the user (an unwritable cache), not a source line of ours to read.
-        print(f"{parser.prog} {args.command}: warning: {message}", file=sys.stderr)
+        # A warning for the user (an unwritable cache), not a source line of ours to read; on a line of its
+        # own, not at the end of a progress bar's.
+        from tqdm import tqdm
+
+        tqdm.write(f"{parser.prog} {args.command}: warning: {message}", file=sys.stderr)
 
     try:
         with warnings.catch_warnings():

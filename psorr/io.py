@@ -1,4 +1,4 @@
-"""Reading and writing point clouds (PCD, PLY, XYZ/TXT, NPY) and meshes (STL, OBJ, PLY).
+"""Reading and writing point clouds (PCD, PLY, XYZ/TXT, NPY); meshes (STL, OBJ, PLY) are read by psorr.mesh_io.
 
 Every failure caused by the file -- missing, empty, unknown suffix, malformed,
 truncated, zero points, all points NaN -- raises CloudFileError naming the file
@@ -22,7 +22,6 @@ from __future__ import annotations
 import io
 import warnings
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -32,17 +31,13 @@ from psorr.ply import decode_ply, encode_ply
 from psorr.records import cloud_from_fields, load_table
 from psorr.types import PointCloud
 
-if TYPE_CHECKING:
-    import trimesh
-
 CLOUD_SUFFIXES = (".pcd", ".ply", ".xyz", ".txt", ".npy")
-MESH_SUFFIXES = (".stl", ".obj", ".ply")
 
 _NORMALS = ("nx", "ny", "nz")
 _UNIT_TOLERANCE = 0.01  # loose enough for normals printed with 3 digits, far tighter than colours
 
 
-def _suffix(path: Path, allowed: tuple[str, ...], what: str) -> str:
+def require_suffix(path: Path, allowed: tuple[str, ...], what: str) -> str:
     suffix = path.suffix.lower()
     if suffix not in allowed:
         raise CloudFileError(path, f"unknown {what} format {suffix or '(no suffix)'!r}",
@@ -50,7 +45,7 @@ def _suffix(path: Path, allowed: tuple[str, ...], what: str) -> str:
     return suffix
 
 
-def _check_file(path: Path) -> None:
+def require_file(path: Path) -> None:
     """CloudFileError unless ``path`` is an existing, non-empty file."""
     if not path.exists():
         raise CloudFileError(path, "file not found", "check the path and the working directory")
@@ -61,7 +56,7 @@ def _check_file(path: Path) -> None:
 
 
 def _read_bytes(path: Path) -> bytes:
-    _check_file(path)
+    require_file(path)
     try:
         return path.read_bytes()
     except OSError as exc:
@@ -92,7 +87,7 @@ def read_cloud(path) -> PointCloud:
             or a PLY mesh (faces).
     """
     path = Path(path)
-    suffix = _suffix(path, CLOUD_SUFFIXES, "point-cloud")
+    suffix = require_suffix(path, CLOUD_SUFFIXES, "point-cloud")
     data = _read_bytes(path)
     if suffix == ".pcd":
         return decode_pcd(path, data)
@@ -162,42 +157,6 @@ def _decode_npy(path: Path, data: bytes) -> PointCloud:
 
 
 
-def read_mesh(path) -> trimesh.Trimesh:
-    """Read a triangle mesh from .stl, .obj or .ply (vertices in the file's units).
-
-    A file holding several meshes is concatenated into one (trimesh ``force='mesh'``).
-
-    Raises:
-        CloudFileError: unknown suffix, missing/empty/unparseable file, or no faces.
-    """
-    import trimesh  # imported here: it is slow to import and only meshes need it
-
-    path = Path(path)
-    _suffix(path, MESH_SUFFIXES, "mesh")
-    _check_file(path)
-    try:
-        # Unprocessed first: processing drops the faces of NaN or inf vertices without a word.
-        mesh = trimesh.load(path, force="mesh", process=False)
-    except Exception as exc:  # trimesh's many loaders raise many exception types
-        raise CloudFileError(path, f"cannot be read as a mesh: {type(exc).__name__}: {exc}",
-                             "re-export it as STL, OBJ or PLY") from None
-    if not isinstance(mesh, trimesh.Trimesh):
-        raise CloudFileError(path, f"holds a {type(mesh).__name__}, not one triangle mesh",
-                             "export a single mesh")
-    broken = int(np.count_nonzero(~np.isfinite(mesh.vertices).all(axis=1)))
-    if broken:
-        raise CloudFileError(path, f"{broken} of its {len(mesh.vertices)} vertices are NaN or infinite",
-                             "repair or re-export the mesh")
-    mesh.process()  # what trimesh.load does by default: merge duplicate vertices
-    if len(mesh.faces) == 0:
-        raise CloudFileError(path, "the mesh has no faces",
-                             "export the surface, not just its vertices")
-    if not mesh.area > 0:  # every triangle degenerate: nothing to sample a surface from
-        raise CloudFileError(path, f"the mesh's {len(mesh.faces)} faces have no area",
-                             "export the surface; its triangles are collapsed to lines or points")
-    return mesh
-
-
 # ----------------------------------------------------------------------------- write
 
 
@@ -215,7 +174,7 @@ def write_cloud(
         CloudFileError: unknown suffix or the file cannot be written.
     """
     path = Path(path)
-    suffix = _suffix(path, CLOUD_SUFFIXES, "point-cloud")
+    suffix = require_suffix(path, CLOUD_SUFFIXES, "point-cloud")
     if not isinstance(cloud, PointCloud):
         raise InvalidInputError(f"write_cloud needs a PointCloud, got {type(cloud).__name__}")
     if len(cloud) == 0:

@@ -25,13 +25,12 @@ from scipy.spatial import ConvexHull, QhullError
 from psorr import param_checks as check
 from psorr.decomposition import DecomposeParams, decompose
 from psorr.errors import CloudFileError, InvalidInputError
-from psorr.io import read_mesh
 from psorr.library_file import load_models, save_models
+from psorr.mesh_io import MESH_SUFFIXES, read_mesh
 from psorr.ppf import HashParams, PairTable
 from psorr.training_cache import cache_dir, entry_path, load_entry, store_entry
 from psorr.types import PointCloud, PrimitiveKind, PrimitiveShapeGraph
 
-MESH_SUFFIXES = (".stl", ".obj", ".ply")
 UNITS = {"m": 1.0, "mm": 0.001}
 
 
@@ -254,6 +253,10 @@ def library_from_arguments(items, units: str | None = None, progress=None) -> Mo
             raise CloudFileError(paths[0], f"--units {units} applies to meshes; a saved library is in metres already",
                                  "leave out --units")
         return ModelLibrary.load(paths[0])
+    saved = next((p for p in paths if p.suffix.lower() == ".npz"), None)
+    if saved is not None:
+        raise CloudFileError(saved, "is a saved library, given with other MODELS",
+                             "pass a saved library alone, or mesh files and folders without it")
     meshes = []
     for p in paths:
         if p.is_dir():

@@ -130,7 +130,7 @@ class WorkpieceInfo:
 
     def load_mesh(self):
         """The part's trimesh.Trimesh (metres, model frame); CloudFileError if unreadable."""
-        from psorr.io import read_mesh
+        from psorr.mesh_io import read_mesh
 
         return read_mesh(self.mesh_path)
 
@@ -148,7 +148,7 @@ class WorkpieceInfo:
 
 @functools.lru_cache(maxsize=64)
 def _mesh_bounds(path: Path) -> np.ndarray:
-    from psorr.io import read_mesh
+    from psorr.mesh_io import read_mesh
 
     bounds = np.asarray(read_mesh(path).bounds, dtype=float)
     bounds.setflags(write=False)

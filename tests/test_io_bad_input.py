@@ -11,7 +11,8 @@ import trimesh
 from pcd_headers import pcd_header
 
 from psorr.errors import CloudFileError
-from psorr.io import CLOUD_SUFFIXES, read_cloud, read_mesh, write_cloud
+from psorr.io import CLOUD_SUFFIXES, read_cloud, write_cloud
+from psorr.mesh_io import read_mesh
 from psorr.types import PointCloud
 
 

@@ -176,3 +176,49 @@ def test_bad_settings_name_the_field():
         ContinuationParams(ring=0.0)
     with pytest.raises(Exception, match="TrainParams"):
         TrainParams(sample_spacing=0)
+
+
+def test_an_inside_out_mesh_is_turned_right_side_out_and_said(tmp_path):
+    # Its normals all pointed into the part, and the transformer was then found nowhere, without a word.
+    mesh = trimesh.load(MESHES / "u_channel.stl")
+    mesh.invert()
+    mesh.export(tmp_path / "inside_out.stl")
+    with pytest.warns(UserWarning, match="inside_out.stl: the mesh is inside out"):
+        turned = load_mesh_in_metres(tmp_path / "inside_out.stl")
+    assert turned.volume > 0
+    np.testing.assert_allclose(turned.volume, trimesh.load(MESHES / "u_channel.stl").volume)
+
+
+def test_a_mesh_whose_faces_disagree_on_outward_is_refused_with_the_fix(tmp_path):
+    mesh = trimesh.load(MESHES / "u_channel.stl")
+    faces = mesh.faces.copy()
+    faces[::3] = faces[::3, ::-1]
+    trimesh.Trimesh(mesh.vertices, faces, process=False).export(tmp_path / "mixed.stl")
+    with pytest.raises(CloudFileError, match="mixed.stl: its faces disagree on which way is out.*re-orient"):
+        load_mesh_in_metres(tmp_path / "mixed.stl")
+
+
+def test_an_obj_of_several_objects_is_trained_as_one_model_and_said(tmp_path):
+    scene = trimesh.Scene()
+    scene.add_geometry(trimesh.load(MESHES / "bushing.stl"), "bushing")
+    scene.add_geometry(trimesh.load(MESHES / "u_channel.stl").apply_translation([0.3, 0, 0]), "u_channel")
+    scene.export(tmp_path / "two.obj")
+    with pytest.warns(UserWarning, match=r"two.obj: holds 2 meshes \(bushing.*, u_channel.*\), trained as one"):
+        load_mesh_in_metres(tmp_path / "two.obj")
+
+
+def test_a_mesh_file_of_another_format_says_so(tmp_path):
+    (tmp_path / "part.obj").write_bytes((MESHES / "bushing.stl").read_bytes())  # binary STL named .obj
+    with pytest.raises(CloudFileError, match=r"part.obj: holds no faces: .*not a .obj file"):
+        load_mesh_in_metres(tmp_path / "part.obj")
+
+
+def test_an_empty_or_mixed_in_saved_library_is_named(tmp_path):
+    from psorr.library import library_from_arguments
+
+    (tmp_path / "empty.npz").write_bytes(b"")
+    with pytest.raises(CloudFileError, match="empty.npz: the file is empty"):
+        ModelLibrary.load(tmp_path / "empty.npz")
+    saved = ModelLibrary.from_meshes([MESHES / "bushing.stl"]).save(tmp_path / "lib.npz")
+    with pytest.raises(CloudFileError, match="lib.npz: is a saved library, given with other MODELS"):
+        library_from_arguments([saved, MESHES / "u_channel.stl"])
