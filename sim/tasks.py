@@ -26,14 +26,19 @@ def load_task(path) -> Task:
     from psorr.workpieces import load_catalog
 
     path = Path(path)
+    if path.is_dir():
+        raise CloudFileError(path, "is a folder, not a task file", "pass a .yaml task in it, such as tasks/demo.yaml")
     if not path.is_file():
         raise CloudFileError(path, "no such task file", "see tasks/demo.yaml for the format")
     try:
-        spec = yaml.safe_load(path.read_text(encoding="utf-8"))
+        spec = yaml.load(path.read_text(encoding="utf-8"), Loader=_unique_key_loader())
     except UnicodeDecodeError:
         raise CloudFileError(path, "not UTF-8 text", "save the task file as UTF-8 YAML") from None
     except yaml.YAMLError as exc:
-        raise CloudFileError(path, f"not valid YAML ({exc.__class__.__name__})", "fix the syntax") from None
+        where = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
+        at = f", line {where.line + 1}" if where is not None else ""
+        problem = getattr(exc, "problem", None) or exc.__class__.__name__
+        raise CloudFileError(path, f"not valid YAML ({problem}{at})", "fix the syntax") from None
     if not isinstance(spec, dict):
         raise CloudFileError(path, "a task must be a mapping", f"give the keys {', '.join(TASK_KEYS)}")
     unknown = sorted(set(spec) - set(TASK_KEYS))
@@ -59,3 +64,22 @@ def load_task(path) -> Task:
         return Task(path, WorldConfig(workpieces=tuple(parts), **options))
     except InvalidInputError as exc:  # a value out of range, or a part listed twice: this file's fault
         raise CloudFileError(path, str(exc)) from None
+
+
+def _unique_key_loader():
+    """A safe YAML loader that refuses a key given twice in one mapping, which PyYAML would take silently,
+    keeping the last value (a task listing `occluder:` twice ran with whichever came second)."""
+    import yaml
+
+    class Loader(yaml.SafeLoader):
+        def construct_mapping(self, node, deep=False):
+            seen = set()
+            for key_node, _ in node.value:
+                key = self.construct_object(key_node, deep=deep)
+                if key in seen:
+                    raise yaml.constructor.ConstructorError(None, None, f"the key {key!r} is given twice",
+                                                            key_node.start_mark)
+                seen.add(key)
+            return super().construct_mapping(node, deep)
+
+    return Loader

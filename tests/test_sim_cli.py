@@ -42,12 +42,18 @@ def test_bad_task_files_name_the_file_and_the_fix(tmp_path):
              "list.yaml": b"workpieces: [chassis]\ncamera_tilt_deg: [30]\n",
              "range.yaml": b"workpieces: [chassis]\ncamera_height: 5.0\n",
              "twice.yaml": b"workpieces: [chassis, chassis]\n",
-             "latin1.yaml": b"workpieces: [\xe9]\n"}
+             "latin1.yaml": b"workpieces: [\xe9]\n",
+             "key_twice.yaml": b"workpieces: [chassis]\noccluder: true\noccluder: false\n"}
     for name, text in cases.items():
         (tmp_path / name).write_bytes(text)
         out = subprocess.run([sys.executable, "-m", "sim.cli", "run", str(tmp_path / name)],
                              capture_output=True, text=True, timeout=120)
         assert out.returncode == 2 and name in out.stderr and "Traceback" not in out.stderr, out.stderr
+    # PyYAML keeps the last of a key given twice without a word; and a folder is not a missing file.
+    assert "the key 'occluder' is given twice, line 3" in out.stderr
+    folder = subprocess.run([sys.executable, "-m", "sim.cli", "run", str(tmp_path)], capture_output=True, text=True,
+                            timeout=120)
+    assert folder.returncode == 2 and "is a folder, not a task file" in folder.stderr
 
 
 def test_run_wants_at_least_one_episode():
