@@ -207,6 +207,10 @@ class ModelLibrary:
         if isinstance(paths, (str, os.PathLike)):
             raise InvalidInputError(f"from_meshes() takes a list of mesh paths, got the one path {str(paths)!r}: "
                                     "pass [path]")
+        wrong = next((p for p in paths if not isinstance(p, (str, os.PathLike))), None)
+        if wrong is not None:
+            raise InvalidInputError(f"from_meshes() takes paths of mesh files, got a {type(wrong).__name__}: export "
+                                    "it (e.g. trimesh's mesh.export('part.stl')) and pass the path")
         paths = [Path(p) for p in paths]
         if not paths:
             raise InvalidInputError(f"no mesh files given; pass {', '.join(MESH_SUFFIXES)} files or a folder of them")
@@ -233,7 +237,12 @@ class ModelLibrary:
 
     def save(self, path) -> Path:
         """Write the models and their training settings to one .npz file (see psorr.library_file)."""
-        return save_models(Path(path), list(self.models), self.params)
+        path = Path(path)
+        try:
+            return save_models(path, list(self.models), self.params)
+        except OSError as exc:
+            raise CloudFileError(path, f"cannot be written ({exc.strerror or exc})",
+                                 "save to a path in a folder you can write") from None
 
     @classmethod
     def load(cls, path, params: TrainParams | None = None) -> ModelLibrary:

@@ -112,7 +112,8 @@ class Recognizer:
         m = self.library.model(model)
         T = np.asarray(T_cloud_model, dtype=float)
         if T.shape != (4, 4) or not np.isfinite(T).all():
-            raise InvalidInputError(f"T_cloud_model must be a finite (4, 4) pose, got shape {T.shape}")
+            raise InvalidInputError(f"T_cloud_model must be a finite (4, 4) pose, got "
+                                    f"{'shape ' + str(T.shape) if T.shape != (4, 4) else 'NaN or inf in it'}")
         view = SceneView(cloud)
         return self._resolved(view, m, self._fine_icp(view, m, self._coarse_icp(view, m, T)))
 

@@ -222,3 +222,12 @@ def test_an_empty_or_mixed_in_saved_library_is_named(tmp_path):
     saved = ModelLibrary.from_meshes([MESHES / "bushing.stl"]).save(tmp_path / "lib.npz")
     with pytest.raises(CloudFileError, match="lib.npz: is a saved library, given with other MODELS"):
         library_from_arguments([saved, MESHES / "u_channel.stl"])
+
+
+def test_saving_where_it_cannot_be_written_and_passing_a_mesh_object_are_named(tmp_path):
+    lib = ModelLibrary.from_meshes([MESHES / "bushing.stl"])
+    (tmp_path / "a_file").write_text("not a folder")
+    with pytest.raises(CloudFileError, match="lib.npz: cannot be written"):
+        lib.save(tmp_path / "a_file" / "lib.npz")
+    with pytest.raises(InvalidInputError, match="takes paths of mesh files, got a Trimesh: export it"):
+        ModelLibrary.from_meshes([trimesh.load(MESHES / "bushing.stl")])

@@ -298,6 +298,8 @@ def test_refine_names_the_models_it_knows_and_wants_a_pose(library, catalog):
         Recognizer(library).refine(scene.cloud, "chasis", np.eye(4))
     with pytest.raises(InvalidInputError, match=r"\(4, 4\)"):
         Recognizer(library).refine(scene.cloud, "chassis", np.eye(3))
+    with pytest.raises(InvalidInputError, match="got NaN or inf in it"):
+        Recognizer(library).refine(scene.cloud, "chassis", np.full((4, 4), np.nan))
 
 
 def test_a_detection_checks_its_alternatives_like_its_pose():
