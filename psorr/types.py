@@ -17,6 +17,8 @@ from psorr.errors import InvalidInputError
 
 
 def _frozen_array(value, name: str, dtype, shape_tail: tuple[int, ...], n: int | None = None):
+    if getattr(value, "dtype", np.dtype(float)).kind in "cb":  # numpy would drop an imaginary part, or take True as 1
+        raise InvalidInputError(f"{name} must be real numbers, got a {value.dtype.name} array")
     try:
         array = np.array(value, dtype=dtype, copy=True)
     except (TypeError, ValueError) as exc:

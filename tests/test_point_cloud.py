@@ -16,6 +16,13 @@ def test_an_organised_size_must_be_whole_numbers_of_at_least_one(width, height):
         PointCloud(FRONT, width=width, height=height)
 
 
+def test_complex_or_boolean_coordinates_are_refused_not_cast():
+    for points in (FRONT * (1 + 1j), FRONT > 0.5):
+        with pytest.raises(InvalidInputError, match=f"points must be real numbers, got a {points.dtype.name} array"):
+            PointCloud(points)
+    assert PointCloud(FRONT.astype(np.float32)).points.dtype == np.float64
+
+
 def test_labels_that_int64_would_change_are_refused():
     for labels in ([0.5] * 12, [np.nan] * 12, np.full(12, 2**64 - 1, np.uint64)):
         with pytest.raises(InvalidInputError, match="labels must be whole numbers"):
