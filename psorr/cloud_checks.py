@@ -36,7 +36,9 @@ def _require_metres(finite: np.ndarray, what: str) -> None:
         return
     # Single stray values too, which the median lets through: one point 10 km off made a crop grid of
     # 22 GiB, and at 10,000 km Open3D refuses to downsample.
-    far = np.flatnonzero((np.abs(finite) > STRAY_LIMIT).any(axis=1))
+    far = []
+    if finite.max() > STRAY_LIMIT or finite.min() < -STRAY_LIMIT:  # two reductions: no temporary for the rest
+        far = np.flatnonzero((np.abs(finite) > STRAY_LIMIT).any(axis=1))
     if len(far):
         worst = far[np.argmax(np.abs(finite[far]).max(axis=1))]
         at = ", ".join(f"{c:.4g}" for c in finite[worst])
@@ -63,7 +65,7 @@ def require_seen_from_origin(cloud: PointCloud, what: str) -> None:
     behind = int(np.count_nonzero(finite[:, 2] <= 0))
     fix = ("psorr takes clouds in the sensor's frame, OpenCV axes: x right, y down, z forward from the sensor; "
            "one in a world frame: move it into the camera's; one with z towards the sensor: negate y and z")
-    zeros = int(np.count_nonzero((finite == 0.0).all(axis=1)))
+    zeros = int(np.count_nonzero((finite[finite[:, 2] <= 0] == 0.0).all(axis=1))) if behind else 0
     if zeros:  # RealSense, Azure Kinect and ROS exports write a pixel without depth so
         raise InvalidInputError(f"{what}: {zeros} of its {len(finite)} finite points are exactly (0, 0, 0), which "
                                 "depth sensors and their drivers write for pixels without a measurement; mark "
