@@ -1,10 +1,9 @@
 """`make demo`: decompose a seeded Kinect-like scene of our workpieces (and a
 real Kinect cloud when the OSD set is beside the repo), recognise the parts
 with a library trained from their CAD meshes, print results tables against
-the ground truth and write pictures to out/demo/.
-
-The robot cell will take over the demo once the simulator lands; until then
-this shows the recognizer's first stage on data a user can reproduce.
+the ground truth and write pictures to out/demo/. `make demo` then runs the
+robot cell's scripted episodes (psorr-sim run tasks/demo.yaml), with this
+recognizer in the loop.
 """
 
 from __future__ import annotations
