@@ -220,7 +220,7 @@ class ModelLibrary:
                 raise InvalidInputError(f"{twin} and {path} would both be the model {path.stem!r} (a model is named "
                                         "by its file stem): pass each mesh once, or rename one of two different ones")
         start = time.perf_counter()
-        models = []
+        models, writable = [], True
         for path in (progress(paths) if progress else paths):
             if path.is_dir():
                 raise CloudFileError(path, "is a folder", "pass its mesh files (psorr recognize also takes folders)")
@@ -231,7 +231,8 @@ class ModelLibrary:
             model = load_entry(cached, Model, TrainParams) if use_cache else None
             if model is None:
                 model = train_model(path.stem, load_mesh_in_metres(path, units), params, sha)
-                use_cache = use_cache and store_entry(cached, model)  # one warning, not one per mesh
+                # A read-only cache still serves what it holds; its one warning is not repeated per mesh.
+                writable = use_cache and writable and store_entry(cached, model)
             models.append(model)
         return cls.build(models, params, (time.perf_counter() - start) * 1e3)
 

@@ -25,10 +25,12 @@ MESH_SUFFIXES = (".stl", ".obj", ".ply")
 def read_mesh(path) -> trimesh.Trimesh:
     """Read a triangle mesh from .stl, .obj or .ply (vertices in the file's units).
 
-    A file holding several meshes is concatenated into one (trimesh ``force='mesh'``).
+    A file holding several meshes is concatenated into one (trimesh ``force='mesh'``), with a warning that
+    names them; an inside-out closed mesh is turned right side out, with a warning.
 
     Raises:
-        CloudFileError: unknown suffix, missing/empty/unparseable file, or no faces.
+        CloudFileError: unknown suffix, missing/empty/unparseable file, no faces, or a closed mesh whose
+            faces disagree on which way is out.
     """
     import trimesh  # imported here: it is slow to import and only meshes need it
 

@@ -231,3 +231,20 @@ def test_saving_where_it_cannot_be_written_and_passing_a_mesh_object_are_named(t
         lib.save(tmp_path / "a_file" / "lib.npz")
     with pytest.raises(InvalidInputError, match="takes paths of mesh files, got a Trimesh: export it"):
         ModelLibrary.from_meshes([trimesh.load(MESHES / "bushing.stl")])
+
+
+def test_a_cache_that_cannot_be_written_still_serves_what_it_holds(monkeypatch):
+    from psorr import training_cache
+
+    ModelLibrary.from_meshes([MESHES / "bushing.stl"])  # cached
+    trained = []
+    real_train = library_module.train_model
+    monkeypatch.setattr(library_module, "train_model", lambda *a, **k: trained.append(a[0]) or real_train(*a, **k))
+
+    def read_only(path, models):
+        raise PermissionError(13, "Permission denied", str(path))
+
+    monkeypatch.setattr(training_cache, "save_models", read_only)
+    with pytest.warns(UserWarning, match="Permission denied") as caught:
+        ModelLibrary.from_meshes([MESHES / "u_channel.stl", MESHES / "flanged_hub.stl", MESHES / "bushing.stl"])
+    assert trained == ["u_channel", "flanged_hub"] and len(caught) == 1
