@@ -26,9 +26,12 @@ Observation (a dict; part i is the task's i-th part; world frame, metres):
 
 Reward: +1 for a grasp held through the transport, +1 for a part seated in its fixture, -0.01
 per wait, -0.1 per refused pick. ``terminated`` once every part has had its pick; ``truncated``
-after ``max_steps`` actions (gymnasium's TimeLimit when made with ``gymnasium.make``), once the
-simulated time passes ``MAX_EPISODE_S``, or when the workspace stays blocked (``info["gave_up"]``); the
-parts left are then given up in the episode.
+after ``max_steps`` actions, once the simulated time passes ``MAX_EPISODE_S``, or when the workspace
+stays blocked (``info["gave_up"]`` says which); the parts left are then given up in the episode. Made
+with ``gymnasium.make``, the step limit is gymnasium's TimeLimit instead, which the env does not see
+(gymnasium hides it from the env's spec): its truncation sets no ``info["gave_up"]``, the parts left
+stay in ``episode.remaining`` (``episode.result()`` reports them as not reached), and a step after it
+would still pick. Call ``reset()`` after any truncation, as gymnasium requires.
 """
 
 from __future__ import annotations
