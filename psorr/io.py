@@ -15,6 +15,7 @@ format  points  normals  colours  labels  organised  notes
 .xyz    yes     yes      no       no      no         text, exact float64 (also .txt)
 .npy    yes     yes      no       no      yes        (N, 3|6) or (H, W, 3|6) float64
 ======  ======  =======  =======  ======  =========  ===================================
+What a format cannot keep is said when writing (a warning), never dropped without a word.
 """
 
 from __future__ import annotations
@@ -186,6 +187,10 @@ def write_cloud(
         # Nothing is dropped without a word: these formats hold points and normals only.
         warnings.warn(f"{path.name}: {suffix} keeps points and normals only; the cloud's "
                       f"{' and '.join(lost)} are not written (use .pcd or .ply to keep them)", stacklevel=2)
+    if suffix in (".ply", ".xyz", ".txt") and cloud.height is not None and cloud.height > 1:
+        warnings.warn(f"{path.name}: {suffix} has no image layout; the cloud's {cloud.width}x{cloud.height} "
+                      "rows are written as an unorganised list, NaN rows included (use .pcd or .npy to keep "
+                      "the layout)", stacklevel=2)
     if suffix == ".pcd":
         data = encode_pcd(cloud, "binary_compressed" if compressed else
                           "binary" if binary else "ascii")

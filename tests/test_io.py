@@ -91,6 +91,7 @@ def test_pcd_unorganised_stays_unorganised(tmp_path):
     _assert_points(back.points, cloud.points)
 
 
+@pytest.mark.filterwarnings("ignore:.*has no image layout")  # said; tested below
 @pytest.mark.parametrize("binary", [True, False], ids=["binary", "ascii"])
 def test_ply_round_trip_with_colours_normals_labels(tmp_path, binary):
     cloud = _organised_cloud()
@@ -128,6 +129,7 @@ def test_ply_big_endian(tmp_path):
 
 
 @pytest.mark.filterwarnings("ignore:.*keeps points and normals only")  # the loss is the point here
+@pytest.mark.filterwarnings("ignore:.*has no image layout")
 @pytest.mark.parametrize("suffix", [".xyz", ".txt", ".XYZ"])
 @pytest.mark.parametrize("normals", [True, False])
 def test_xyz_round_trip(tmp_path, suffix, normals):
@@ -343,3 +345,11 @@ def test_writing_labels_to_a_format_without_them_warns(tmp_path):
     cloud = PointCloud(np.zeros((3, 3)), labels=[1, 2, 3])
     with pytest.warns(UserWarning, match="labels are not written"):
         write_cloud(tmp_path / "plain.xyz", cloud)
+
+
+def test_writing_an_image_to_a_format_without_a_layout_says_so(tmp_path):
+    cloud = PointCloud(_organised_cloud().points, width=4, height=3)
+    for suffix in (".ply", ".xyz"):
+        with pytest.warns(UserWarning, match=f"c{suffix}: {suffix} has no image layout; the cloud's 4x3 rows"):
+            write_cloud(tmp_path / f"c{suffix}", cloud)
+        assert not read_cloud(tmp_path / f"c{suffix}").is_organised
