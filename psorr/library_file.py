@@ -53,7 +53,7 @@ def save_models(path, models, params=None):
             np.savez_compressed(f, **arrays)
         os.replace(tmp, path)
     except BaseException:
-        os.unlink(tmp)
+        tmp.unlink(missing_ok=True)  # absent when it could not even be created: the error to report is that one
         raise
     return path
 

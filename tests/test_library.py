@@ -233,6 +233,21 @@ def test_saving_where_it_cannot_be_written_and_passing_a_mesh_object_are_named(t
         ModelLibrary.from_meshes([trimesh.load(MESHES / "bushing.stl")])
 
 
+def test_a_file_that_cannot_be_created_is_reported_as_such(tmp_path, monkeypatch):
+    # The clean-up of the temporary file raised FileNotFoundError over the real error when the temporary
+    # itself could not be created, and the warning then named the wrong reason.
+    from psorr import library_file
+
+    def no_permission(*args, **kwargs):
+        raise PermissionError(13, "Permission denied")
+
+    lib = ModelLibrary.from_meshes([MESHES / "bushing.stl"])
+    monkeypatch.setattr(library_file, "open", no_permission, raising=False)
+    with pytest.raises(CloudFileError, match="lib.npz: cannot be written \\(Permission denied\\)"):
+        lib.save(tmp_path / "lib.npz")
+    assert not any(p.name.startswith("lib.npz") for p in tmp_path.iterdir())  # nothing half-written left
+
+
 def test_a_cache_that_cannot_be_written_still_serves_what_it_holds(monkeypatch):
     from psorr import training_cache
 
