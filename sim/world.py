@@ -23,7 +23,6 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-from dataclasses import dataclass
 from pathlib import Path
 from types import MappingProxyType
 
@@ -32,6 +31,7 @@ import numpy as np
 
 from psorr.errors import InvalidInputError
 from psorr.workpieces import WorkpieceInfo, load_catalog
+from sim.built_world import HOME_KEY, World, pose_matrix, quat_of
 from sim.layout import WorldBuildError, place_parts, yaw_matrix
 from sim.occluder import RADII, ReachSchedule, occluder_pose, segment_half_lengths
 from sim.robot import ArmConfig, apply_arm_options, load_arm_spec
@@ -42,98 +42,8 @@ COLLISION_DIR = Path(__file__).resolve().parents[1] / "assets" / "workpieces" / 
 """CoACD collision parts and their index.json, written by assets/workpieces/build_collision.py."""
 CAMERA_NAME = "kinect"
 ARM_PREFIX = "arm/"
-HOME_KEY = "home"
 _GEOM = mujoco.mjtGeom
 _REBUILD = "build them with: .venv/bin/python assets/workpieces/build_collision.py"
-
-
-@dataclass(frozen=True, eq=False)
-class World:
-    """A built cell. Poses are (4, 4) read-only arrays in the world frame (metres).
-
-    Parts at rest sleep (MuJoCo's sleeping; see ``_scene``), and writing a sleeping part's ``qpos``
-    does not move it: to place parts by hand, write their ``qpos`` right after :meth:`reset`, when
-    every body is awake, or clear ``mujoco.mjtEnableBit.mjENBL_SLEEP`` in ``model.opt.enableflags``.
-
-    Attributes:
-        config: what was built.
-        spec: the MjSpec it was compiled from (edit and ``spec.compile()`` for variants).
-        model, data: the compiled model and a data at the ``"home"`` keyframe, forwarded.
-        arm: the arm's names in this model (prefixed ``"arm/"``).
-        workpieces: body names of the workpieces (= their catalog names), in config order.
-        catalog: catalog entry of each workpiece.
-        T_world_workpieces: settled pose of each workpiece's body (= model frame) at home.
-        T_world_fixtures: per workpiece, the pose its model frame has when seated in its fixture.
-        T_world_camera: the camera's pose with OpenCV axes (x right, y down, z forward).
-        camera_name: the camera to render (``sim.sensor.DepthCamera(model, camera_name)``).
-        table_top: z of the table top.
-        T_world_arm_base: pose of the arm's mounting frame.
-        occluder: the human's reach schedule, None without the occluder.
-        occluder_geoms: names of the occluder's capsule geoms (= its mocap bodies' names), e.g.
-            ``"human/hand"``; empty without the occluder.
-    """
-
-    config: WorldConfig
-    spec: mujoco.MjSpec
-    model: mujoco.MjModel
-    data: mujoco.MjData
-    arm: ArmConfig
-    workpieces: tuple[str, ...]
-    catalog: MappingProxyType
-    T_world_workpieces: MappingProxyType
-    T_world_fixtures: MappingProxyType
-    T_world_camera: np.ndarray
-    camera_name: str
-    table_top: float
-    T_world_arm_base: np.ndarray
-    occluder: ReachSchedule | None = None
-    occluder_geoms: tuple[str, ...] = ()
-
-    def reset(self, data: mujoco.MjData | None = None) -> mujoco.MjData:
-        """Put ``data`` (default: ``self.data``) at the home keyframe and forward it; return it."""
-        data = self.data if data is None else data
-        mujoco.mj_resetDataKeyframe(self.model, data, self.model.key(HOME_KEY).id)
-        mujoco.mj_forward(self.model, data)
-        return data
-
-    def body_pose(self, name: str, data: mujoco.MjData | None = None) -> np.ndarray:
-        """Pose (4, 4) of body ``name`` in ``data`` (default ``self.data``; kinematics must be current)."""
-        data = self.data if data is None else data
-        body_id = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, name)
-        if body_id < 0:
-            raise InvalidInputError(f"the world has no body {name!r}; workpieces are {list(self.workpieces)}")
-        return _pose(data.xpos[body_id], data.xmat[body_id].reshape(3, 3))
-
-    def apply_occluder(self, data: mujoco.MjData | None = None, t: float = 0.0,
-                       schedule: ReachSchedule | None = None, poses: dict | None = None) -> mujoco.MjData:
-        """Pose the occluder for time ``t`` (s) of ``schedule`` (default: ``self.occluder``) in ``data``,
-        or at ``poses`` (``{geom name: T_world_body}`` as :func:`sim.occluder.occluder_pose` gives) when given.
-
-        Sets ``data.mocap_pos`` / ``mocap_quat`` (default ``self.data``); call ``mj_forward`` (or step)
-        before reading poses or rendering. Returns ``data``. InvalidInputError without an occluder.
-        """
-        data = self.data if data is None else data
-        schedule = self.occluder if schedule is None else schedule
-        if not self.occluder_geoms or schedule is None:
-            raise InvalidInputError("this world has no occluder: build it with WorldConfig(occluder=True)")
-        poses = occluder_pose(schedule, t) if poses is None else poses
-        for name, T in poses.items():
-            mocap = self.model.body_mocapid[self.model.body(name).id]
-            data.mocap_pos[mocap] = T[:3, 3]
-            data.mocap_quat[mocap] = _quat(T[:3, :3])
-        return data
-
-
-def _pose(p, R) -> np.ndarray:
-    T = np.eye(4)
-    T[:3, :3], T[:3, 3] = R, p
-    return T
-
-
-def _quat(R) -> np.ndarray:
-    q = np.zeros(4)
-    mujoco.mju_mat2Quat(q, np.ascontiguousarray(R, dtype=float).ravel())
-    return q
 
 
 def collision_index() -> dict:
@@ -189,8 +99,8 @@ def _scene(spec: mujoco.MjSpec, cfg: WorldConfig) -> None:
     eye = target + cfg.camera_height * np.array([math.tan(theta), 0.0, 1.0])
     # MuJoCo camera axes: x = image right (+y: the camera faces -x), y = image up (towards the arm), z = -forward.
     right, up = np.array([0.0, 1.0, 0.0]), np.array([-math.cos(theta), 0.0, math.sin(theta)])
-    spec.worldbody.add_camera(name=CAMERA_NAME, pos=eye, quat=_quat(np.column_stack([right, up, np.cross(right, up)])),
-                              fovy=fovy_deg(cfg.intrinsics))
+    R = np.column_stack([right, up, np.cross(right, up)])
+    spec.worldbody.add_camera(name=CAMERA_NAME, pos=eye, quat=quat_of(R), fovy=fovy_deg(cfg.intrinsics))
 
 
 def _add_workpiece(spec, info: WorkpieceInfo, files: list[str], mesh, pos, quat) -> None:
@@ -228,7 +138,7 @@ def _add_occluder(spec: mujoco.MjSpec, schedule: ReachSchedule) -> tuple[str, ..
     spec.add_material(name="skin", rgba=(0.80, 0.62, 0.50, 1), specular=0.1)
     half = segment_half_lengths()
     for name, T in occluder_pose(schedule, -math.inf).items():
-        body = spec.worldbody.add_body(name=name, mocap=True, pos=T[:3, 3], quat=_quat(T[:3, :3]))
+        body = spec.worldbody.add_body(name=name, mocap=True, pos=T[:3, 3], quat=quat_of(T[:3, :3]))
         body.add_geom(default=cls, name=name, type=_GEOM.mjGEOM_CAPSULE,
                       size=[RADII[name.split("/")[-1]], half[name], 0], material="skin")
     return tuple(half)
@@ -275,13 +185,13 @@ def build_world(config: WorldConfig = WorldConfig(), rng: np.random.Generator | 
     for name in cfg.workpieces if cfg.fixtures else ():
         x, y, yaw = spots[f"{name}_fixture"]
         R = yaw_matrix(yaw)
-        fixtures[name] = _pose([x, y, cfg.table_height], R)
-        body = spec.worldbody.add_body(name=f"{name}_fixture", pos=[x, y, cfg.table_height], quat=_quat(R))
+        fixtures[name] = pose_matrix([x, y, cfg.table_height], R)
+        body = spec.worldbody.add_body(name=f"{name}_fixture", pos=[x, y, cfg.table_height], quat=quat_of(R))
         _add_boxes(spec, body, f"{name}_fixture", _fixture_walls(bounds[name], cfg), "fixture")
     for name in cfg.workpieces:
         x, y, yaw = spots[name]
         pos = [x, y, cfg.table_height + cfg.drop_height]
-        _add_workpiece(spec, catalog[name], index[name]["files"], meshes[name], pos, _quat(yaw_matrix(yaw)))
+        _add_workpiece(spec, catalog[name], index[name]["files"], meshes[name], pos, quat_of(yaw_matrix(yaw)))
     schedule, occluder_geoms = None, ()
     if cfg.occluder:  # drawn last: the layout above does not depend on it
         data = mujoco.MjData(bare)
@@ -320,10 +230,10 @@ def build_world(config: WorldConfig = WorldConfig(), rng: np.random.Generator | 
         config=cfg, spec=spec, model=model, data=data, arm=arm, workpieces=cfg.workpieces,
         catalog=MappingProxyType({n: catalog[n] for n in cfg.workpieces}),
         T_world_workpieces=MappingProxyType(
-            {n: frozen(_pose(data.xpos[i], data.xmat[i].reshape(3, 3))) for n, i in bodies.items()}
+            {n: frozen(pose_matrix(data.xpos[i], data.xmat[i].reshape(3, 3))) for n, i in bodies.items()}
         ),
         T_world_fixtures=MappingProxyType({n: frozen(T) for n, T in fixtures.items()}),
         T_world_camera=frozen(T_world_camera_opencv(model, data, CAMERA_NAME)),
-        camera_name=CAMERA_NAME, table_top=cfg.table_height, T_world_arm_base=frozen(_pose(base, np.eye(3))),
+        camera_name=CAMERA_NAME, table_top=cfg.table_height, T_world_arm_base=frozen(pose_matrix(base, np.eye(3))),
         occluder=schedule, occluder_geoms=occluder_geoms,
     )
