@@ -37,6 +37,7 @@ demo: setup
 
 bench: setup
 	$(BIN)/python benchmarks/decompose.py
+	$(BIN)/python benchmarks/kernels.py
 	$(BIN)/python benchmarks/osd_false_positives.py
 	$(BIN)/python benchmarks/table1.py
 	$(BIN)/python benchmarks/peers.py   # the OpenCV peer needs: $(BIN)/pip install -e ".[bench]"

@@ -1,39 +1,26 @@
-"""Tests for psorr.box_overlap: rigid moves, separating axes, exact box-box intersection volume."""
+"""Tests for psorr.box_overlap: rigid moves and the exact box-box intersection volume. Separating axes and
+properties over random boxes: test_box_overlap_sat.py."""
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from oriented_boxes import box, random_box
 from scipy.optimize import linprog
 from scipy.spatial import ConvexHull, HalfspaceIntersection
 from scipy.spatial.transform import Rotation
 
 from psorr.box_overlap import (
     boxes_may_overlap,
-    boxes_to_arrays,
     intersection_points,
     intersection_ratio,
     intersection_volume,
-    overlap_candidates,
     transform_box,
 )
 from psorr.errors import InvalidInputError, PsorrError
 from psorr.types import OrientedBox
 
 SQRT_HALF = np.sqrt(0.5)
-
-
-def box(center=(0, 0, 0), extent=(1, 1, 1), rotation=None) -> OrientedBox:
-    rotation = np.eye(3) if rotation is None else rotation
-    return OrientedBox(np.asarray(center, float), rotation, np.asarray(extent, float))
-
-
-def random_box(rng, spread=0.3, size=(0.05, 1.0)) -> OrientedBox:
-    return box(rng.uniform(-spread, spread, 3), rng.uniform(*size, 3), Rotation.random(random_state=rng).as_matrix())
 
 
 def rigid(rng) -> np.ndarray:
@@ -292,72 +279,3 @@ def test_bad_boxes_raise_psorr_errors(bad):
             call(bad, box())
         with pytest.raises(PsorrError):
             call(box(), bad)
-
-
-# --- separating axes -----------------------------------------------------------------------------------------------
-
-
-def test_vectorised_candidates_agree_with_scalar_sat():
-    rng = np.random.default_rng(13)
-    set_a = [random_box(rng, spread=1.0) for _ in range(20)]
-    set_b = [random_box(rng, spread=1.0) for _ in range(10)]
-    grid = overlap_candidates(*boxes_to_arrays(set_a), *boxes_to_arrays(set_b))
-    assert grid.shape == (20, 10) and grid.dtype == bool
-    scalar = np.array([[boxes_may_overlap(a, b) for b in set_b] for a in set_a])
-    np.testing.assert_array_equal(grid, scalar)
-    assert 0 < grid.sum() < grid.size
-    # SAT never rejects a pair with a positive intersection.
-    volumes = np.array([[intersection_volume(a, b) for b in set_b] for a in set_a])
-    assert not (volumes > 0)[~grid].any()
-    # A mask restricts the test to its pairs and leaves the rest False.
-    mask = rng.random(grid.shape) < 0.5
-    masked = overlap_candidates(*boxes_to_arrays(set_a), *boxes_to_arrays(set_b), mask=mask)
-    np.testing.assert_array_equal(masked, grid & mask)
-
-
-def test_overlap_candidates_shapes():
-    empty = boxes_to_arrays([])
-    one = boxes_to_arrays([box()])
-    assert overlap_candidates(*empty, *one).shape == (0, 1)
-    assert overlap_candidates(*one, *empty).shape == (1, 0)
-    assert overlap_candidates(*one, *one).tolist() == [[True]]
-    with pytest.raises(InvalidInputError):
-        overlap_candidates(np.zeros((2, 3)), np.zeros((1, 3, 3)), np.zeros((2, 3)), *one)
-    with pytest.raises(InvalidInputError, match="mask must be"):
-        overlap_candidates(*one, *one, mask=np.ones((2, 1), dtype=bool))
-
-
-# --- properties and speed ------------------------------------------------------------------------------------------
-
-coordinate = st.floats(-1.0, 1.0, allow_nan=False)
-boxes = st.builds(
-    lambda c, e, q: box(c, e, Rotation.from_quat(q).as_matrix()),
-    st.tuples(coordinate, coordinate, coordinate),
-    st.tuples(*[st.floats(1e-3, 1.0)] * 3),
-    st.tuples(*[coordinate] * 4).filter(lambda q: np.linalg.norm(q) > 0.1),
-)
-
-
-@settings(max_examples=300, deadline=None)
-@given(boxes, boxes)
-def test_volume_is_symmetric_and_bounded(a, b):
-    forward, backward = intersection_volume(a, b), intersection_volume(b, a)
-    assert forward == pytest.approx(backward, rel=1e-7, abs=1e-12)
-    assert 0.0 <= forward <= min(a.volume, b.volume)
-    if not boxes_may_overlap(a, b):
-        assert forward == 0.0
-
-
-def test_intersection_volume_speed():
-    rng = np.random.default_rng(14)
-    pairs = []
-    while len(pairs) < 1000:
-        a, b = random_box(rng, spread=0.2), random_box(rng, spread=0.2)
-        if boxes_may_overlap(a, b) and intersection_volume(a, b) > 0:
-            pairs.append((a, b))
-    start = time.perf_counter()
-    for a, b in pairs:
-        intersection_volume(a, b)
-    per_call = (time.perf_counter() - start) / len(pairs)
-    print(f"\nintersection_volume: {per_call * 1e6:.0f} us per overlapping pair (mean of {len(pairs)})")
-    assert per_call < 2e-3
