@@ -120,7 +120,7 @@ class Recognizer:
     def _coarse_icp(self, view, model, T):
         # 1000 model points and 15 iterations: enough to tell the hopeless candidates (see _accept).
         return refine_icp(view, model.points, model.normals, T, self.params.icp_distance, iterations=15,
-                          max_points=1000)
+                          max_points=1000, skip_holes=True)
 
     def _coarse_fit(self, view, model, T):
         """The coarse ICP of a candidate, and its coarse point check. A part that slides almost onto
