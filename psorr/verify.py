@@ -28,9 +28,9 @@ SHADOW_REACH = 8
 # a nearer edge's shadow) pair in ICP with whatever lies within reach instead: the flange, the table. Where
 # they were 43-58% of a partly hidden hub's or bushing's visible points, the coarse ICP took the part from
 # its true pose to 5-21 mm off, and the check then rejected it. Above this share they are left out of the
-# coarse ICP. Leaving them out always found the same parts but cost precision: over 72 clutter scenes,
-# brackets converged onto other parts' walls and false detections went from 6 to 13; above a third, none
-# was added (README, "Recognition: where it stands").
+# coarse ICP. Over 72 clutter images, leaving them out of every coarse ICP found 4 parts more and 2 false
+# detections more (brackets converged onto other parts' walls; 7 more when left out of the fine ICP too);
+# above this share, 3 parts more and no false detection more (README, "Recognition: where it stands").
 HOLE_SHARE = 0.3
 _SCATTERED_FOCAL = 0.5  # buffer pixels per point spacing for scattered points (sampled surfaces, thinned clouds)
 _GRID_NEIGHBOUR = 0.8  # spacings: a median nearest-neighbour gap beyond this is a grid's, not scattered points'
