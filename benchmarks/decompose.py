@@ -14,12 +14,12 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-import time
 from pathlib import Path
 
 import _single_core  # noqa: F401  (must precede numpy)
 import numpy as np
 import open3d as o3d
+from timing import best_of
 from tqdm import tqdm
 
 from psorr.decomposition import DecomposeParams, decompose
@@ -56,17 +56,6 @@ def open3d_plane_loop(cloud: PointCloud, voxel: float = 0.01, distance: float = 
     for voxel_index, members in enumerate(traces):
         labels[valid[np.asarray(members)]] = down_labels[voxel_index]
     return labels
-
-
-def best_of(repeats: int, job):
-    """(result, fastest wall ms) of `repeats` runs: a shared VM's timings
-    wander by 15 %, and the fastest run is the one least disturbed."""
-    best, result = np.inf, None
-    for _ in range(repeats):
-        start = time.perf_counter()
-        result = job()
-        best = min(best, (time.perf_counter() - start) * 1e3)
-    return result, best
 
 
 def run(scene_paths, repeats: int) -> list[dict]:

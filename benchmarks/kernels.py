@@ -20,7 +20,7 @@ import argparse
 import json
 import sys
 import tempfile
-import time
+from functools import partial
 from pathlib import Path
 
 import _single_core  # noqa: F401  (must precede numpy)
@@ -29,6 +29,7 @@ import open3d as o3d
 from scipy.optimize import linprog
 from scipy.spatial import ConvexHull, HalfspaceIntersection
 from scipy.spatial.transform import Rotation
+from timing import best_of
 from tqdm import tqdm
 
 from psorr.box_batch import intersection_ratios
@@ -39,15 +40,6 @@ from psorr.types import OrientedBox, PointCloud
 ROOT = Path(__file__).resolve().parents[1]
 LEARN0 = ROOT.parent / "shared" / "osd" / "learn" / "learn0.pcd"
 TARGETS = {"pcd_read_ms": 100.0, "pair_ms": 2.0}
-
-
-def best_ms(repeats: int, function, *args, **kwargs) -> float:
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        function(*args, **kwargs)
-        times.append((time.perf_counter() - start) * 1e3)
-    return min(times)
 
 
 def pcd_files(folder: Path, rng: np.random.Generator) -> list[tuple[str, Path]]:
@@ -73,8 +65,9 @@ def read_rows(files, repeats: int) -> list[dict]:
         n_psorr = len(read_cloud(path))
         n_o3d = len(o3d.io.read_point_cloud(str(path), remove_nan_points=False).points)
         rows.append(dict(file=label, points=n_psorr, open3d_points=n_o3d,
-                         psorr_ms=best_ms(repeats, read_cloud, path),
-                         open3d_ms=best_ms(repeats, o3d.io.read_point_cloud, str(path), remove_nan_points=False)))
+                         psorr_ms=best_of(repeats, partial(read_cloud, path))[1],
+                         open3d_ms=best_of(repeats, partial(o3d.io.read_point_cloud, str(path),
+                                                             remove_nan_points=False))[1]))
     return rows
 
 
@@ -119,9 +112,9 @@ def box_rows(pairs, repeats: int) -> list[dict]:
         return [volume(a, b) for a, b in pairs]
 
     timings = {
-        "psorr box_overlap, one pair at a time": best_ms(repeats, each, intersection_volume),
-        "psorr box_batch, all pairs at once": best_ms(repeats, intersection_ratios, *arrays, 0.0),
-        "scipy Qhull (linprog + HalfspaceIntersection + ConvexHull)": best_ms(1, each, qhull_volume),
+        "psorr box_overlap, one pair at a time": best_of(repeats, partial(each, intersection_volume))[1],
+        "psorr box_batch, all pairs at once": best_of(repeats, partial(intersection_ratios, *arrays, 0.0))[1],
+        "scipy Qhull (linprog + HalfspaceIntersection + ConvexHull)": best_of(1, partial(each, qhull_volume))[1],
     }
     differences = {"psorr box_overlap, one pair at a time": single, "psorr box_batch, all pairs at once": batch,
                    "scipy Qhull (linprog + HalfspaceIntersection + ConvexHull)": qhull}
