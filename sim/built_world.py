@@ -75,6 +75,13 @@ class World:
             raise InvalidInputError(f"the world has no body {name!r}; workpieces are {list(self.workpieces)}")
         return pose_matrix(data.xpos[body_id], data.xmat[body_id].reshape(3, 3))
 
+    def kinematics(self, q: np.ndarray) -> mujoco.MjData:
+        """A scratch MjData at qpos ``q`` (nq,) with forward kinematics done; ``self.data`` is not touched."""
+        data = mujoco.MjData(self.model)
+        data.qpos[:] = q
+        mujoco.mj_kinematics(self.model, data)
+        return data
+
     def apply_occluder(self, data: mujoco.MjData | None = None, t: float = 0.0,
                        schedule: ReachSchedule | None = None, poses: dict | None = None) -> mujoco.MjData:
         """Pose the occluder for time ``t`` (s) of ``schedule`` (default: ``self.occluder``) in ``data``,

@@ -299,10 +299,3 @@ def ik_for(world: World) -> ArmIK:
         _IK_CACHE[key] = ArmIK(world.model, world.arm)
     return _IK_CACHE[key]
 
-
-def kinematics(world: World, q: np.ndarray) -> mujoco.MjData:
-    """A scratch MjData at ``q`` with forward kinematics done."""
-    data = mujoco.MjData(world.model)
-    data.qpos[:] = q
-    mujoco.mj_kinematics(world.model, data)
-    return data

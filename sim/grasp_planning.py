@@ -16,7 +16,7 @@ import mujoco
 import numpy as np
 
 from psorr.workpieces import Grasp
-from sim.cell import ArmCell, kinematics
+from sim.cell import ArmCell
 from sim.ik import UnreachableTargetError
 
 PRE_GRASP = 0.10  # m back along -approach before the approach
@@ -176,7 +176,7 @@ def configuration_problem(cell: ArmCell, q: np.ndarray) -> str:
     if not -math.pi <= lift <= 0.0:
         return f"wound-up arm (shoulder lift {math.degrees(lift):.0f} deg, outside [-180, 0])"
     model = cell.model
-    data = kinematics(cell.world, q)
+    data = cell.world.kinematics(q)
     tool_z = float(data.site_xpos[model.site(cell.cfg.tool_site).id][2])
     if tool_z < cell.world.table_top:  # a link through the table can escape the contact test below
         return f"the tool would be {1e3 * (cell.world.table_top - tool_z):.0f} mm under the table top"

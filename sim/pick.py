@@ -16,7 +16,7 @@ import numpy as np
 
 from psorr.errors import InvalidInputError
 from psorr.workpieces import symmetry_transforms
-from sim.cell import ArmCell, WorkspaceBlockedError, kinematics
+from sim.cell import ArmCell, WorkspaceBlockedError
 from sim.grasp_planning import (
     LIFT,
     PRE_GRASP,
@@ -158,7 +158,7 @@ def pick_and_place(world: World, part: str, T_world_part_estimate: np.ndarray,
         try:
             cell.gripper_to(world.arm.gripper_open, 0.4)
             q = cell.commanded_q()
-            T = T_world_site(world.model, kinematics(world, q), world.arm.tool_site)
+            T = T_world_site(world.model, world.kinematics(q), world.arm.tool_site)
             cell.follow(cell.path(q, T, shift(T, [0, 0, LIFT])), 0.8)
         except (UnreachableTargetError, WorkspaceBlockedError):
             pass
