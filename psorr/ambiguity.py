@@ -1,25 +1,20 @@
-"""Near-symmetries: turns that map a model almost onto itself, and choosing between them in a scene.
+"""Choosing between a model's near-symmetric poses in a scene.
 
 A sheet-metal tray with a connector window at one end is, to a point-pair matcher, the same
 tray turned end for end: every primitive has its twin. Verification at the primitive level
 cannot tell the two poses apart, and the turned one is often accepted. The difference lies in
 small features (a window, a gland hole, a row of holes) that only a dense point check sees.
 
-:func:`near_symmetries` finds, per model, the half turns about its principal axes (through
-the centroid of its samples), each settled onto the model by ICP, that move its surface by little
-on average (an L bracket's legs swap about their bisector, a few degrees off its principal axes);
-exact symmetries qualify too, and the resolver drops them (their poses are one part).
-:func:`near_continuous_axis` finds an axis about
-which any turn is a near-symmetry (a flanged hub, whose yaw only its bolt holes fix).
-:func:`near_uniform_direction` finds a direction along which the part slides almost onto itself (a
-U-channel along its length, which only its two end faces fix): ICP cannot place such a part along
-it, and a pose from primitive pairs can start a centimetre or two off there, or several when others
-hide part of its faces (:meth:`NearSymmetryResolver.slide_onto_surface` then finds it along the data
-before ICP). :class:`NearSymmetryResolver` re-fits each turned pose with ICP, searches the turn about
-the axis or the slide along the direction, and keeps the pose whose rendered depth
-(:mod:`psorr.depth_compare`) agrees best with the measurement where the candidates differ. When the
-features are hidden the poses cannot be told apart: the original is kept, and the half turns the view
-did not rule out are returned with it, for a detection's ``alternatives``.
+:mod:`psorr.model_symmetries` finds, once per model, its near-symmetric half turns, an axis of
+near-continuous symmetry (a flanged hub) and a direction it slides along almost onto itself (a
+U-channel): ICP cannot place such a part along it, and a pose from primitive pairs can start a
+centimetre or two off there, or several when others hide part of its faces
+(:meth:`NearSymmetryResolver.slide_onto_surface` then finds it along the data before ICP).
+:class:`NearSymmetryResolver` re-fits each turned pose with ICP, searches the turn about the axis or
+the slide along the direction, and keeps the pose whose rendered depth (:mod:`psorr.depth_compare`)
+agrees best with the measurement where the candidates differ. When the features are hidden the
+poses cannot be told apart: the original is kept, and the half turns the view did not rule out are
+returned with it, for a detection's ``alternatives``.
 """
 
 from __future__ import annotations
@@ -27,33 +22,26 @@ from __future__ import annotations
 import weakref
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from psorr.depth_compare import DepthRenderer, residual_costs
+from psorr.model_symmetries import (
+    exact_but_features,
+    exact_symmetries,
+    near_continuous_axis,
+    near_symmetries,
+    near_uniform_direction,
+)
 from psorr.point_check import CheckParams, PoseCheck, check_pose
 from psorr.rotations import turn
-from psorr.types import PrimitiveKind
 from psorr.verify import SceneView, refine_icp
 
-NEAR_MEAN_DISTANCE = 0.03  # x model diameter: turns moving the surface less than this on average are near-symmetries
-EXACT_DISTANCE = 2e-4  # m: a turn moving no sample further than this from the mesh is an exact symmetry
-# m: a half turn moving no sample further than this from the mesh is a symmetry in all but its facets (a
-# round part's tessellation moves 0.6 mm); the least feature that breaks one in the catalog moves 7 mm.
-FACET_DISTANCE = 1e-3
-AXIS_TEST_DEGREES = (7.0, 19.0, 37.0, 90.0, 143.0)  # turns that must all be near-symmetries for a near-continuous axis
 AXIS_COARSE_DEG, AXIS_FINE_DEG = 4.0, 0.5
-# A slide by TEST_SHIFT x diameter that moves the surface by less than UNIFORM_LIMIT x the slide on average
-# (90% of the surface slides onto itself) makes a direction near-uniform; slides are searched up to
-# SLIDE_REACH x diameter, in SLIDE_COARSE steps, then SLIDE_FINE steps around the best.
-TEST_SHIFT, UNIFORM_LIMIT = 0.05, 0.1
+# Slides are searched up to SLIDE_REACH x diameter, in SLIDE_COARSE steps, then SLIDE_FINE steps around the best.
 SLIDE_REACH, SLIDE_COARSE, SLIDE_FINE = 0.16, 0.02, 0.005
 # x diameter: how far a candidate is slid to find the measured surface (slide_onto_surface), and in what
 # steps (ICP, after it, pairs points up to 12 mm apart: 0.09 of the U-channel's diameter)
 SLIDE_SEARCH, SLIDE_SEARCH_STEP = 0.4, 0.05
 DENSE_CHECK = CheckParams(max_points=6000)
-# A half turn that moves fewer than FEATURE_SHARE of the samples further than FEATURE_MOVE from the surface
-# is exact but for small features (the chassis' window and gland hole).
-FEATURE_MOVE, FEATURE_SHARE = 0.002, 0.1
 # A turned pose replaces the original only when its residual is clearly lower; when the features
 # that tell them apart are hidden the residuals tie, and recognition's own choice stands.
 SWITCH_RATIO = 0.9
@@ -62,116 +50,6 @@ SWITCH_RATIO = 0.9
 # where its end walls are seen edge-on (Table 1's full views, the demo cell's), the wrong end costs
 # 0.97-1.39 times the right one; where they face the sensor (Table 1's partial views), 1.6-3.0.
 UNRESOLVED_RATIO = 1.5
-
-
-def near_symmetries(points: np.ndarray, diameter: float, limit: float = NEAR_MEAN_DISTANCE) -> np.ndarray:
-    """(K, 4, 4) model-frame near-symmetries S: half turns about principal axes through the samples'
-    centroid, each settled by ICP of S(points) onto points, whose mean nearest-sample distance
-    is below ``limit`` x ``diameter``; one per distinct turn, and K may be 0.
-
-    Args:
-        points: (N, 3) even surface samples of the model, metres.
-        diameter: the model's diameter, metres.
-    """
-    centroid = points.mean(axis=0)
-    _, axes = np.linalg.eigh(np.cov((points - centroid).T))
-    tree = cKDTree(points)
-    subset = points[:: max(1, len(points) // 3000)]
-    found = []
-    for axis in axes.T:
-        R = 2.0 * np.outer(axis, axis) - np.eye(3)  # a half turn about the axis
-        S = np.eye(4)
-        S[:3, :3], S[:3, 3] = R, centroid - R @ centroid
-        # A part that is not quite symmetric (an L bracket with legs of 60 and 50 mm) has its
-        # principal axes a few degrees off the turn that swaps its halves; settle onto that turn.
-        S, distance = _settled(S, subset, tree)
-        duplicate = any(np.linalg.norm(S[:3, :3] - F[:3, :3]) < 0.1 for F in found)
-        if distance.mean() < limit * diameter and not duplicate:
-            found.append(S)
-    return np.array(found).reshape(-1, 4, 4)
-
-
-def _settled(S: np.ndarray, points: np.ndarray, tree: cKDTree, iterations: int = 15) -> tuple[np.ndarray, np.ndarray]:
-    """The self-map S (4, 4) refined by point-to-point ICP of S(points) onto the model's own
-    samples (``tree``), and the final nearest-sample distances (N,) in metres."""
-    sparse = points[::3]  # the fit needs far fewer points than the final distances
-    for _ in range(iterations):
-        moved = sparse @ S[:3, :3].T + S[:3, 3]
-        _, nearest = tree.query(moved)
-        target = tree.data[nearest]
-        mu_m, mu_t = moved.mean(axis=0), target.mean(axis=0)
-        U, _, Vt = np.linalg.svd((moved - mu_m).T @ (target - mu_t))
-        D = np.diag([1.0, 1.0, np.sign(np.linalg.det(Vt.T @ U.T))])
-        step = np.eye(4)
-        step[:3, :3] = Vt.T @ D @ U.T
-        step[:3, 3] = mu_t - step[:3, :3] @ mu_m
-        S = step @ S
-        if np.abs(step[:3, 3]).max() < 1e-6 and np.trace(step[:3, :3]) > 3.0 - 1e-10:
-            break  # settled
-    distance, _ = tree.query(points @ S[:3, :3].T + S[:3, 3])
-    return S, distance
-
-
-def near_continuous_axis(model, renderer: DepthRenderer,
-                         limit: float = NEAR_MEAN_DISTANCE) -> tuple[np.ndarray, np.ndarray] | None:
-    """The axis (a point (3,) on it, its direction (3,)) about which every test turn of ``model`` is a
-    near-symmetry (mean distance below ``limit`` x diameter) but not all are exact symmetries (a
-    turned sample lands more than ``EXACT_DISTANCE`` from the mesh), or None.
-
-    A flanged hub is such a part: turned by any angle it is the same hub except for its bolt holes.
-    A plain bushing is exactly symmetric, and no turn of it needs telling apart. The candidates are
-    the model's cylinder axes and its principal axes; a cylinder's axis is the sharper estimate
-    (principal axes of a squat part are barely determined), and the best-fitting candidate wins.
-    """
-    points = model.points
-    centroid = points.mean(axis=0)
-    _, axes = np.linalg.eigh(np.cov((points - centroid).T))
-    candidates = [(p.axis_point, p.axis) for p in model.graph.primitives if p.kind is PrimitiveKind.CYLINDER]
-    candidates += [(centroid, axis) for axis in axes.T]
-    subset = points[:: max(1, len(points) // 1500)]
-    best, best_mean = None, np.inf
-    for point, axis in candidates:
-        means, largest = [], 0.0
-        for a in AXIS_TEST_DEGREES:  # most candidates fail the first turn or two
-            distance = renderer.distance((subset - point) @ turn(axis, np.radians(a)).T + point)
-            means.append(distance.mean())
-            largest = max(largest, float(distance.max()))
-            if means[-1] >= limit * model.diameter:
-                break
-        else:
-            if largest > EXACT_DISTANCE and np.mean(means) < best_mean:
-                best, best_mean = (np.asarray(point, float), np.asarray(axis, float)), float(np.mean(means))
-    return best
-
-
-def near_uniform_direction(model, renderer: DepthRenderer) -> np.ndarray | None:
-    """The unit direction (3,), model frame, among the principal axes of ``model``'s samples, along
-    which a slide by TEST_SHIFT x diameter moves its surface least, if that is below UNIFORM_LIMIT x
-    the slide on average; else None. Of the catalog only the U-channel has one (0.06); the chassis,
-    whose end walls fix it, and the circuit board come next at 0.16 and 0.13."""
-    points = model.points[:: max(1, len(model.points) // 1500)]
-    _, axes = np.linalg.eigh(np.cov((points - points.mean(axis=0)).T))
-    shift = TEST_SHIFT * model.diameter
-    moved = np.array([renderer.distance(points + shift * axis).mean() for axis in axes.T]) / shift
-    k = int(np.argmin(moved))
-    return axes[:, k] if moved[k] < UNIFORM_LIMIT else None
-
-
-def _symmetries(renderer: DepthRenderer, points: np.ndarray, turns: np.ndarray) -> np.ndarray:
-    """(K,) bool: does each turn (K, 4, 4) map every sample of ``points`` (N, 3) to within FACET_DISTANCE of
-    the mesh? Such a turn is a symmetry: its poses are the same part, with nothing to tell apart."""
-    subset = points[:: max(1, len(points) // 1500)]
-    return np.array([renderer.distance(subset @ S[:3, :3].T + S[:3, 3]).max() <= FACET_DISTANCE for S in turns],
-                    dtype=bool)
-
-
-def _exact_but_features(points: np.ndarray, turns: np.ndarray) -> np.ndarray:
-    """(K,) bool: does each turn (K, 4, 4) move fewer than FEATURE_SHARE of the model's ``points`` (N, 3)
-    further than FEATURE_MOVE from the samples?"""
-    tree = cKDTree(points)
-    return np.array([(tree.query(points @ S[:3, :3].T + S[:3, 3])[0] > FEATURE_MOVE).mean() < FEATURE_SHARE
-                     for S in turns], dtype=bool)
-
 
 # A model's near-symmetries (turns, which of them are exact but for features, axis, slide direction), by
 # model object: Models are immutable.
@@ -194,8 +72,8 @@ class NearSymmetryResolver:
         if found is None:  # about 0.1 s a model, so once per model object however many recognizers use it
             turns = near_symmetries(model.points, model.diameter)
             # Exact symmetries (the transformer's, the bushing's) need no choosing: their poses are one part.
-            turns = turns[~_symmetries(self.renderer, model.points, turns)]
-            found = _FOUND[model] = (turns, _exact_but_features(model.points, turns),
+            turns = turns[~exact_symmetries(self.renderer, model.points, turns)]
+            found = _FOUND[model] = (turns, exact_but_features(model.points, turns),
                                      near_continuous_axis(model, self.renderer),
                                      near_uniform_direction(model, self.renderer))
         self.turns, self._exact_but_features, self.axis, self.slide = found

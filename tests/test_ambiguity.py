@@ -5,10 +5,11 @@ import numpy as np
 import pytest
 import trimesh
 
-from psorr.ambiguity import NearSymmetryResolver, near_symmetries, near_uniform_direction
+from psorr.ambiguity import NearSymmetryResolver
 from psorr.camera import CameraIntrinsics, depth_to_cloud, look_at
 from psorr.kinect_noise import KINECT_V1, kinect_noise_with_source
 from psorr.library import ModelLibrary
+from psorr.model_symmetries import near_symmetries, near_uniform_direction
 from psorr.raycast import render_meshes
 from psorr.scenes import workpiece_scene
 from psorr.verify import SceneView
