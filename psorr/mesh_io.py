@@ -2,7 +2,7 @@
 
 Every failure caused by the file raises CloudFileError naming it and the fix. What is taken but may
 not be what the user meant is said (a warning): several meshes in one file, trained as one model,
-and a mesh turned inside out, trained turned right side out.
+a mesh turned inside out, trained turned right side out, and a mesh that is not closed.
 """
 
 from __future__ import annotations
@@ -86,8 +86,15 @@ def _wound_outward(path: Path, mesh):
     """``mesh``, turned right side out if it is inside out (said); refused if its faces disagree on which way
     is out. Models take their normals from the winding: an inside-out export (common from CAD) was found
     nowhere, and one with a third of its faces flipped scored lower, without a word. Only a closed mesh has
-    an inside to tell outward from; an open one is taken as it is."""
+    an inside to tell outward from; an open one is taken as it is, and said."""
     if not mesh.is_watertight:
+        import trimesh
+
+        open_edges = len(trimesh.grouping.group_rows(mesh.edges_sorted, require_count=1))
+        warnings.warn(f"{path}: the mesh is not closed ({open_edges} edges border one face only), so nothing tells "
+                      "which way is out: its normals are taken from the faces' winding as exported, and a surface "
+                      "with no back is trained as it is; export the part as a closed solid (watertight STL) to "
+                      "silence this", stacklevel=3)
         return mesh
     if not mesh.is_winding_consistent:
         raise CloudFileError(path, "its faces disagree on which way is out (some are wound against their "

@@ -116,6 +116,22 @@ def test_implausible_size_needs_units(tmp_path):
     assert np.allclose(load_mesh_in_metres(path, "mm").extents, (0.1, 0.06, 0.04))
 
 
+def test_a_tiny_mesh_is_not_told_to_shrink_further(tmp_path):
+    path = tmp_path / "speck.stl"
+    trimesh.creation.box(extents=(0.0007, 0.0005, 0.0004)).export(path)
+    with pytest.raises(CloudFileError, match="speck.stl.*under 5 mm") as refused:
+        load_mesh_in_metres(path)
+    assert "--units mm" not in str(refused.value)
+
+
+def test_given_units_that_make_a_part_implausible_are_taken_and_said(tmp_path):
+    path = tmp_path / "block.stl"
+    trimesh.creation.box(extents=(0.1, 0.06, 0.04)).export(path)  # metres, read as millimetres
+    with pytest.warns(UserWarning, match=r"block.stl: in mm the mesh is 0.1 mm across.*check --units"):
+        mesh = load_mesh_in_metres(path, "mm")
+    assert np.allclose(mesh.extents, (1e-4, 6e-5, 4e-5))
+
+
 def test_not_a_library_is_a_clear_error(tmp_path):
     bad = tmp_path / "models.npz"
     bad.write_bytes(b"nonsense")
@@ -139,7 +155,8 @@ def test_a_flat_mesh_trains(tmp_path, monkeypatch):
     monkeypatch.setenv("PSORR_CACHE", str(tmp_path / "cache"))
     sheet = trimesh.Trimesh([[0, 0, 0], [0.1, 0, 0], [0, 0.1, 0]], [[0, 1, 2]])
     sheet.export(tmp_path / "sheet.stl")
-    model = ModelLibrary.from_meshes([tmp_path / "sheet.stl"]).models[0]
+    with pytest.warns(UserWarning, match="sheet.stl: the mesh is not closed"):
+        model = ModelLibrary.from_meshes([tmp_path / "sheet.stl"]).models[0]
     assert 0.12 < model.diameter <= np.sqrt(2) * 0.1 + 1e-9
 
 

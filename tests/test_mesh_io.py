@@ -59,3 +59,13 @@ def test_read_mesh_errors(tmp_path):
     # trimesh would drop the faces of a NaN vertex and train what is left.
     (tmp_path / "nan.obj").write_text("v 0 0 0\nv 0.1 0 0\nv 0 0.1 0\nv nan 0 0.1\nf 1 2 3\nf 1 2 4\n")
     _expect_mesh_error(tmp_path / "nan.obj", "1 of its 4 vertices are NaN or infinite")
+
+
+def test_an_open_mesh_is_taken_and_said(tmp_path):
+    box = trimesh.creation.box(extents=(0.1, 0.06, 0.04))
+    open_box = trimesh.Trimesh(box.vertices, box.faces[2:])  # one side's two triangles left out
+    path = tmp_path / "open_box.stl"
+    open_box.export(path)
+    with pytest.warns(UserWarning, match=r"open_box.stl: the mesh is not closed \(4 edges border one face"):
+        mesh = read_mesh(path)
+    assert len(mesh.faces) == 10  # taken as it is, not repaired
