@@ -11,6 +11,10 @@ class InvalidInputError(PsorrError, ValueError):
     """An argument has the wrong shape, type or value. The message names the fix."""
 
 
+class TooSparseError(InvalidInputError):
+    """A cloud holds too few points, or too few voxels, to decompose into primitives."""
+
+
 class CloudFileError(PsorrError):
     """A cloud or mesh file is missing, empty, all-NaN, malformed or of an unknown format."""
 

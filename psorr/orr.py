@@ -23,7 +23,7 @@ def orr_hypotheses(recognizer, cloud, view, rng):
     pts = view.object_points
     nrm = np.asarray(view.objects.normals)
     tree = view.object_tree
-    if len(pts) < 2:
+    if len(nrm) < 2:  # fewer than 3 points off the table get no normals: nothing to pair
         return [], 0, 0.0
     diameters = np.array([m.diameter for m in library.models])
     drawn_poses, drawn_models = [], []

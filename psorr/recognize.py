@@ -31,7 +31,7 @@ from psorr.cloud_checks import require_seen_from_origin
 from psorr.continuation import on_larger_object
 from psorr.decomposition import decompose
 from psorr.decomposition.detail import decompose_leftovers
-from psorr.errors import InvalidInputError
+from psorr.errors import InvalidInputError, TooSparseError
 from psorr.library import ModelLibrary
 from psorr.orr import orr_hypotheses
 from psorr.pair_candidates import PairCandidates
@@ -152,10 +152,12 @@ class Recognizer:
         # table larger than any model, so it still is not paired as a part's face.
         margin = _TABLE_EXTENT / 2 * self.max_diameter
         cropped = crop_to_parts(cloud, view.support_plane, margin, p.support_crop)
-        if cropped.valid_mask.sum() <= p.decompose.k_neighbours:
-            # A handful of points, most of them table: too few to decompose, and nothing to find (as ORR says).
+        try:
+            scene = decompose(cropped, p.decompose, rng)
+        except TooSparseError:
+            # A handful of points, most of them table, or a few clumps: too few voxels to decompose, and
+            # nothing to find (as ORR says).
             return [], 0, 0.0, (time.perf_counter() - t0) * 1e3
-        scene = decompose(cropped, p.decompose, rng)
         if p.leftover_voxel is not None:
             scene = decompose_leftovers(cropped, scene, p.leftover_voxel, p.decompose, rng)
         tally = SearchTally(decomposition_ms=(time.perf_counter() - t0) * 1e3)
@@ -169,9 +171,13 @@ class Recognizer:
                 t0 = time.perf_counter()
                 # The standing points that are explained go; the table stays, for the crop's band.
                 left = crop_to_parts(blanked(cropped, standing & ~rest), view.support_plane, margin, p.support_crop)
-                fine = decompose(left, replace(p.decompose, voxel_size=p.fine_voxel), rng)
+                try:
+                    fine = decompose(left, replace(p.decompose, voxel_size=p.fine_voxel), rng)
+                except TooSparseError:
+                    fine = None
                 tally.decomposition_ms += (time.perf_counter() - t0) * 1e3
-                self._search(cloud, view, fine, tally)
+                if fine is not None:
+                    self._search(cloud, view, fine, tally)
         return tally.detections, tally.hypotheses, tally.verify_ms, tally.decomposition_ms
 
     def _search(self, cloud, view, scene, tally: SearchTally) -> None:

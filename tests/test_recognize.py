@@ -212,6 +212,11 @@ def test_a_handful_of_points_gives_no_detection(library, method):
     # PSORR cropped all but 4 of these as table and then refused to decompose "a cloud of 4 points".
     points = np.random.default_rng(0).uniform(-0.1, 0.1, (10, 3)) + [0, 0, 1]
     assert Recognizer(library, method).recognize(PointCloud(points), np.random.default_rng(0)).detections == ()
+    # Many points in five clumps fill five voxels: PSORR refused them with "use a smaller voxel_size", an
+    # option recognize() does not have.
+    rng = np.random.default_rng(1)
+    clumps = np.repeat(rng.uniform(-0.1, 0.1, (5, 3)) + [0, 0, 1], 100, axis=0) + rng.normal(0, 1e-4, (500, 3))
+    assert Recognizer(library, method).recognize(PointCloud(clumps), np.random.default_rng(0)).detections == ()
 
 
 @pytest.mark.parametrize("method", ["psorr", "orr"])

@@ -17,7 +17,7 @@ import numpy as np
 
 from psorr.decomposition.pipeline import DecomposeParams, Decomposition, DecompositionStats, decompose
 from psorr.decomposition.psg import close_pairs
-from psorr.errors import InvalidInputError
+from psorr.errors import InvalidInputError, TooSparseError
 from psorr.types import PointCloud, PrimitiveShapeGraph
 
 _EDGE_SAMPLES = 400  # inliers per primitive that decide the edges between the two passes' primitives
@@ -37,7 +37,10 @@ def decompose_leftovers(cloud: PointCloud, coarse: Decomposition, voxel_size: fl
     left = np.flatnonzero((coarse.labels < 0) & cloud.valid_mask)
     if len(left) < params.min_points:
         return coarse
-    fine = decompose(PointCloud(cloud.points[left]), dataclasses.replace(params, voxel_size=voxel_size), rng)
+    try:
+        fine = decompose(PointCloud(cloud.points[left]), dataclasses.replace(params, voxel_size=voxel_size), rng)
+    except TooSparseError:  # a few clumps of leftovers: no primitive among them
+        return coarse
     if not fine.primitives:
         return coarse
     offset = len(coarse.primitives)

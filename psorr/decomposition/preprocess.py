@@ -10,7 +10,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from psorr.columns import column_max, column_min
-from psorr.errors import InvalidInputError
+from psorr.errors import TooSparseError
 from psorr.types import PointCloud
 
 
@@ -144,14 +144,15 @@ def preprocess(cloud: PointCloud, voxel_size: float, k_neighbours: int) -> Voxel
     valid = cloud.valid_mask
     n_valid = int(valid.sum())
     if n_valid < k_neighbours + 1:
-        raise InvalidInputError(
+        raise TooSparseError(
             f"the cloud has {n_valid} finite points; decomposition needs at least {k_neighbours + 1}"
         )
     given = None if cloud.normals is None else cloud.normals[valid]
     centroids, voxel_of_valid = voxel_downsample(cloud.points[valid], voxel_size, given)
     if len(centroids) < k_neighbours + 1:
-        raise InvalidInputError(
-            f"only {len(centroids)} voxels of {voxel_size} m; use a smaller voxel_size"
+        raise TooSparseError(
+            f"its points fill only {len(centroids)} voxels of {voxel_size} m, and decomposition needs at least "
+            f"{k_neighbours + 1}; use a smaller voxel_size"
         )
     voxel_of = np.full(len(cloud), -1, dtype=np.int64)
     voxel_of[valid] = voxel_of_valid
