@@ -26,6 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
+from psorr.array_checks import UNIT_TOLERANCE, not_unit
 from psorr.errors import CloudFileError, InvalidInputError
 from psorr.pcd import decode_pcd, encode_pcd
 from psorr.ply import decode_ply, encode_ply
@@ -35,7 +36,6 @@ from psorr.types import PointCloud
 CLOUD_SUFFIXES = (".pcd", ".ply", ".xyz", ".txt", ".npy")
 
 _NORMALS = ("nx", "ny", "nz")
-_UNIT_TOLERANCE = 0.01  # loose enough for normals printed with 3 digits, far tighter than colours
 
 
 def require_suffix(path: Path, allowed: tuple[str, ...], what: str) -> str:
@@ -113,12 +113,11 @@ def _check_unit_normals(path: Path, normals: np.ndarray) -> None:
     Unnamed columns carry no meaning of their own, and x y z r g b is as common as
     x y z nx ny nz; colours taken as normals would silently spoil recognition.
     """
-    norms = np.linalg.norm(normals[np.isfinite(normals).all(axis=1)], axis=1)
-    off = np.abs(norms - 1.0) > _UNIT_TOLERANCE
-    if off.any():
+    off, finite, median = not_unit(normals)
+    if off:
         raise CloudFileError(
-            path, f"columns 4-6 are not unit normals: {off.sum()} of {len(norms)} rows have a "
-            f"norm outside 1 +- {_UNIT_TOLERANCE} (median norm {np.median(norms):.3g})",
+            path, f"columns 4-6 are not unit normals: {off} of {finite} rows have a "
+            f"norm outside 1 +- {UNIT_TOLERANCE} (median norm {median:.3g})",
             "columns 4-6 must be unit normals nx ny nz; for colours, use .ply or .pcd with "
             "named fields, or keep only x y z")
 

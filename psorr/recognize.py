@@ -26,6 +26,7 @@ from scipy.spatial import cKDTree
 
 from psorr import param_checks as check
 from psorr.ambiguity import NearSymmetryResolver
+from psorr.array_checks import random_generator
 from psorr.claims import PixelClaims, SearchTally
 from psorr.cloud_checks import require_seen_from_origin
 from psorr.continuation import on_larger_object
@@ -42,7 +43,7 @@ from psorr.recognize_params import METHODS, Recognition, RecognitionStats, Recog
 from psorr.single_cylinder import SingleCylinderMatcher
 from psorr.single_plane import SinglePlaneMatcher
 from psorr.support_crop import crop_to_parts, floats_above
-from psorr.types import Detection, PointCloud, PrimitiveKind, random_generator
+from psorr.types import Detection, PointCloud, PrimitiveKind
 from psorr.unexplained import blanked, on_detected_surface, part_sized, standing_points, standing_unexplained
 from psorr.verify import SceneView, refine_icp
 

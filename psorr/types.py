@@ -13,42 +13,8 @@ from functools import cached_property
 
 import numpy as np
 
+from psorr.array_checks import UNIT_TOLERANCE, frozen_array, integer_labels, not_unit, rigid_pose
 from psorr.errors import InvalidInputError
-
-
-def _frozen_array(value, name: str, dtype, shape_tail: tuple[int, ...], n: int | None = None):
-    if getattr(value, "dtype", np.dtype(float)).kind in "cb":  # numpy would drop an imaginary part, or take True as 1
-        raise InvalidInputError(f"{name} must be real numbers, got a {value.dtype.name} array")
-    try:
-        array = np.array(value, dtype=dtype, copy=True)
-    except (TypeError, ValueError) as exc:
-        raise InvalidInputError(f"{name} must be convertible to a {np.dtype(dtype).name} array: {exc}") from None
-    expected_ndim = 1 + len(shape_tail)
-    if array.ndim != expected_ndim or array.shape[1:] != shape_tail:
-        want = "(N" + "".join(f", {s}" for s in shape_tail) + ")"
-        raise InvalidInputError(f"{name} must have shape {want}, got {array.shape}")
-    if n is not None and array.shape[0] != n:
-        raise InvalidInputError(f"{name} has {array.shape[0]} rows but the cloud has {n} points")
-    array.setflags(write=False)
-    return array
-
-
-def _integer_labels(value, n: int) -> np.ndarray:
-    """``value`` as read-only (N,) int64 labels, refusing values that int64 would change (0.5, 2**64 - 1)."""
-    try:
-        raw = np.asarray(value)
-    except (TypeError, ValueError) as exc:
-        raise InvalidInputError(f"labels must be convertible to an int64 array: {exc}") from None
-    rule = "labels must be whole numbers that fit int64, -1 for no label"
-    if raw.dtype.kind == "f":
-        fractional = ~(raw == np.rint(raw))  # NaN too
-        if fractional.any():
-            raise InvalidInputError(f"labels hold {int(fractional.sum())} non-integer values (first: "
-                                    f"{raw[fractional].flat[0]:g}); {rule}")
-    # int64 holds [-2**63, 2**63): floats that large, and uint64 above it, would wrap.
-    if raw.dtype.kind in "fu" and raw.size and (raw.max() >= 2**63 or raw.min() < -(2**63)):
-        raise InvalidInputError(f"labels hold values from {raw.min()} to {raw.max()}, beyond int64; {rule}")
-    return _frozen_array(raw, "labels", np.int64, (), n)
 
 
 @dataclass(frozen=True, eq=False)
@@ -73,19 +39,25 @@ class PointCloud:
     height: int | None = None
 
     def __post_init__(self):
-        points = _frozen_array(self.points, "points", np.float64, (3,))
+        points = frozen_array(self.points, "points", np.float64, (3,))
         n = len(points)
         object.__setattr__(self, "points", points)
         if self.normals is not None:
-            object.__setattr__(self, "normals", _frozen_array(self.normals, "normals", np.float64, (3,), n))
+            normals = frozen_array(self.normals, "normals", np.float64, (3,), n)
+            off, finite, median = not_unit(normals)
+            if off:  # colours or unnormalised sums taken as normals would silently spoil decomposition
+                raise InvalidInputError(f"normals must be unit vectors: {off} of {finite} finite rows have a norm "
+                                        f"outside 1 +- {UNIT_TOLERANCE} (median {median:.3g}); divide them by "
+                                        "their norms, or pass normals=None to have them estimated")
+            object.__setattr__(self, "normals", normals)
         if self.colors is not None:
-            colors = _frozen_array(self.colors, "colors", np.float64, (3,), n)
+            colors = frozen_array(self.colors, "colors", np.float64, (3,), n)
             finite = colors[np.isfinite(colors)]
             if finite.size and (finite.min() < 0.0 or finite.max() > 1.0):
                 raise InvalidInputError("colors must be RGB floats in [0, 1]; divide 8-bit colours by 255")
             object.__setattr__(self, "colors", colors)
         if self.labels is not None:
-            object.__setattr__(self, "labels", _integer_labels(self.labels, n))
+            object.__setattr__(self, "labels", integer_labels(self.labels, n))
         if (self.width is None) != (self.height is None):
             raise InvalidInputError("give both width and height for an organised cloud, or neither")
         for name in ("width", "height"):
@@ -137,8 +109,8 @@ class OrientedBox:
     extent: np.ndarray
 
     def __post_init__(self):
-        object.__setattr__(self, "center", _frozen_array(np.ravel(self.center), "center", np.float64, ()))
-        object.__setattr__(self, "extent", _frozen_array(np.ravel(self.extent), "extent", np.float64, ()))
+        object.__setattr__(self, "center", frozen_array(np.ravel(self.center), "center", np.float64, ()))
+        object.__setattr__(self, "extent", frozen_array(np.ravel(self.extent), "extent", np.float64, ()))
         rotation = np.array(self.rotation, dtype=np.float64)
         if rotation.shape != (3, 3) or self.center.shape != (3,) or self.extent.shape != (3,):
             raise InvalidInputError("an OrientedBox needs center (3,), rotation (3, 3) and extent (3,)")
@@ -182,8 +154,8 @@ class Primitive:
         if len(params) != kind.n_params:
             raise InvalidInputError(f"a {kind.value} has {kind.n_params} params, got {len(params)}")
         object.__setattr__(self, "params", params)
-        object.__setattr__(self, "inliers", _frozen_array(self.inliers, "inliers", np.int64, ()))
-        object.__setattr__(self, "centroid", _frozen_array(np.ravel(self.centroid), "centroid", np.float64, ()))
+        object.__setattr__(self, "inliers", frozen_array(self.inliers, "inliers", np.int64, ()))
+        object.__setattr__(self, "centroid", frozen_array(np.ravel(self.centroid), "centroid", np.float64, ()))
 
     def _require(self, kind: PrimitiveKind, what: str):
         if self.kind is not kind:
@@ -247,28 +219,6 @@ class PrimitiveShapeGraph:
         return sorted({j for i, j in self.edges if i == index} | {i for i, j in self.edges if j == index})
 
 
-def random_generator(rng, caller: str) -> np.random.Generator:
-    """``rng`` if it is a numpy Generator, a fresh ``default_rng(0)`` if it is None; anything else (a
-    seed, the legacy RandomState) is refused, naming ``caller`` and the fix."""
-    if rng is None:
-        return np.random.default_rng(0)
-    if not isinstance(rng, np.random.Generator):
-        raise InvalidInputError(f"{caller} takes rng=np.random.default_rng(seed), a numpy Generator; got "
-                                f"{type(rng).__name__} {rng!r:.40}")
-    return rng
-
-
-def _rigid_pose(value, name: str) -> np.ndarray:
-    """``value`` as a read-only (4, 4) float array, checked to be a rigid transform."""
-    pose = np.array(value, dtype=np.float64)
-    if pose.shape != (4, 4) or not np.isfinite(pose).all():
-        raise InvalidInputError(f"Detection.{name} must be a finite (4, 4) array, got shape {pose.shape}")
-    if not np.allclose(pose[3], (0, 0, 0, 1)) or not np.allclose(pose[:3, :3] @ pose[:3, :3].T, np.eye(3), atol=1e-6):
-        raise InvalidInputError(f"Detection.{name} must be a rigid transform (orthonormal rotation, last row 0 0 0 1)")
-    pose.setflags(write=False)
-    return pose
-
-
 @dataclass(frozen=True, eq=False)
 class Detection:
     """One recognised workpiece instance.
@@ -293,8 +243,8 @@ class Detection:
     alternatives: tuple = ()
 
     def __post_init__(self):
-        object.__setattr__(self, "T_cloud_model", _rigid_pose(self.T_cloud_model, "T_cloud_model"))
-        object.__setattr__(self, "alternatives", tuple(_rigid_pose(P, f"alternatives[{k}]")
+        object.__setattr__(self, "T_cloud_model", rigid_pose(self.T_cloud_model, "T_cloud_model"))
+        object.__setattr__(self, "alternatives", tuple(rigid_pose(P, f"alternatives[{k}]")
                                                        for k, P in enumerate(self.alternatives)))
         for name in ("score", "visible_fraction"):
             value = float(getattr(self, name))

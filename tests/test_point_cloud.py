@@ -31,6 +31,15 @@ def test_labels_that_int64_would_change_are_refused():
     assert kept.dtype == np.int64 and kept.tolist() == list(range(-1, 11))
 
 
+def test_normals_must_be_unit_vectors():
+    colours = np.random.default_rng(0).integers(0, 255, (12, 3)).astype(float)  # RGB passed as normals
+    with pytest.raises(InvalidInputError, match="normals must be unit vectors: 12 of 12 finite rows.*normals=None"):
+        PointCloud(FRONT, normals=colours)
+    up = np.tile([0.0, 0.0, -1.0], (12, 1))
+    up[3] = np.nan  # an invalid pixel's normal is unknown, not wrong
+    assert np.isnan(PointCloud(FRONT, normals=up).normals[3]).all()
+
+
 def test_the_millimetre_check_sees_past_nan_rows_that_recur_with_the_stride():
     points = FRONT.repeat(100, axis=0) * 1000.0
     points[::97] = np.nan  # an organised cloud's invalid pixels can fall on every sampled row

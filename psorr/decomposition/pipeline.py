@@ -11,6 +11,7 @@ from scipy.sparse.csgraph import connected_components
 
 from psorr import param_checks as check
 from psorr import shapes
+from psorr.array_checks import random_generator
 from psorr.boxes import box_around_axis
 from psorr.cloud_checks import require_sensor_metres
 from psorr.columns import column_mean
@@ -21,13 +22,7 @@ from psorr.decomposition.preprocess import Voxelized, preprocess, undirected_edg
 from psorr.decomposition.psg import graph_edges
 from psorr.errors import InvalidInputError
 from psorr.kinect_noise import KINECT_V1
-from psorr.types import (
-    PointCloud,
-    Primitive,
-    PrimitiveKind,
-    PrimitiveShapeGraph,
-    random_generator,
-)
+from psorr.types import PointCloud, Primitive, PrimitiveKind, PrimitiveShapeGraph
 
 
 @dataclass(frozen=True)
