@@ -13,7 +13,6 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import sys
 import time
 import warnings
 from dataclasses import asdict, dataclass, field
@@ -29,10 +28,12 @@ from psorr.errors import CloudFileError, InvalidInputError
 from psorr.library_file import load_models, save_models
 from psorr.mesh_io import MESH_SUFFIXES, read_mesh
 from psorr.ppf import HashParams, PairTable
-from psorr.training_cache import cache_dir, entry_path, load_entry, store_entry
+from psorr.training_cache import entry_path, load_entry, store_entry
 from psorr.types import PointCloud, PrimitiveKind, PrimitiveShapeGraph
 
 UNITS = {"m": 1.0, "mm": 0.001}
+_FOLDER_HINT = (" (a folder's: sorted(Path(folder).glob('*.stl')); or library_from_arguments([folder]) of "
+                "psorr.library_sources, which takes folders as psorr recognize does)")
 
 
 @dataclass(frozen=True)
@@ -217,7 +218,8 @@ class ModelLibrary:
         params = params or TrainParams()
         if isinstance(paths, (str, os.PathLike)):
             raise InvalidInputError(f"from_meshes() takes a list of mesh paths, got the one path {str(paths)!r}: "
-                                    "pass [path]")
+                                    f"pass [path]{_FOLDER_HINT if Path(paths).is_dir() else ''}")
+        paths = list(paths)  # a generator would be spent by the checks before training
         wrong = next((p for p in paths if not isinstance(p, (str, os.PathLike))), None)
         if wrong is not None:
             raise InvalidInputError(f"from_meshes() takes paths of mesh files, got a {type(wrong).__name__}: export "
@@ -234,7 +236,7 @@ class ModelLibrary:
         models, writable = [], True
         for path in (progress(paths) if progress else paths):
             if path.is_dir():
-                raise CloudFileError(path, "is a folder", "pass its mesh files (psorr recognize also takes folders)")
+                raise CloudFileError(path, "is a folder", f"pass its mesh files{_FOLDER_HINT}")
             if not path.is_file():
                 raise CloudFileError(path, "no such mesh file", "check the path")
             sha = hashlib.sha256(path.read_bytes()).hexdigest()
@@ -250,6 +252,9 @@ class ModelLibrary:
     def save(self, path) -> Path:
         """Write the models and their training settings to one .npz file (see psorr.library_file)."""
         path = Path(path)
+        if path.suffix.lower() != ".npz":  # MODELS tells a saved library from meshes by it
+            raise CloudFileError(path, "a saved library's name must end in .npz, as psorr recognize tells "
+                                       "libraries from meshes by it", f"save to {path.with_suffix('.npz').name}")
         try:
             return save_models(path, list(self.models), self.params)
         except OSError as exc:
@@ -261,45 +266,8 @@ class ModelLibrary:
         """A saved library, its pair table rebuilt with ``params``: by default the settings it was trained
         with (TrainParams() for a file that predates saving them)."""
         path = Path(path)
+        if path.suffix.lower() in MESH_SUFFIXES:
+            raise CloudFileError(path, "is a mesh, not a saved library", "train it: ModelLibrary.from_meshes([path])")
         start = time.perf_counter()
         models, saved = load_models(path, Model, TrainParams)
         return cls.build(models, params or saved or TrainParams(), (time.perf_counter() - start) * 1e3)
-
-
-def library_from_arguments(items, units: str | None = None, progress=None) -> ModelLibrary:
-    """MODELS as the CLI takes it: a folder of meshes, mesh files, or one saved library (.npz)."""
-    paths = [Path(i) for i in items]
-    if len(paths) == 1 and paths[0].suffix.lower() == ".npz":
-        if units is not None:
-            raise CloudFileError(paths[0], f"--units {units} applies to meshes; a saved library is in metres already",
-                                 "leave out --units")
-        return ModelLibrary.load(paths[0])
-    saved = next((p for p in paths if p.suffix.lower() == ".npz"), None)
-    if saved is not None:
-        raise CloudFileError(saved, "is a saved library, given with other MODELS",
-                             "pass a saved library alone, or mesh files and folders without it")
-    meshes = []
-    for p in paths:
-        if p.is_dir():
-            found = sorted(f for f in p.iterdir() if f.suffix.lower() in MESH_SUFFIXES)
-            if not found:
-                raise CloudFileError(p, f"the folder holds no {'/'.join(MESH_SUFFIXES)} meshes", _mesh_folder_hint(p))
-            skipped = sorted(f.name for f in p.iterdir() if f.is_file() and f not in found)
-            if skipped:  # said, not silently passed over: a .step or .glb there may be a part the user meant
-                print(f"{p}: skipping {len(skipped)} file(s) that are not {'/'.join(MESH_SUFFIXES)} meshes: "
-                      f"{', '.join(skipped[:8])}{' ...' if len(skipped) > 8 else ''}", file=sys.stderr)
-            meshes += found
-        else:
-            meshes.append(p)
-    print(f"training on {len(meshes)} mesh{'es' if len(meshes) != 1 else ''} (cached in {cache_dir()})",
-          file=sys.stderr)
-    return ModelLibrary.from_meshes(meshes, units=units, progress=progress)
-
-
-def _mesh_folder_hint(folder: Path) -> str:
-    """What to pass instead of a folder without meshes: its subfolders that hold some, if any."""
-    nested = sorted(d for d in folder.iterdir()
-                    if d.is_dir() and any(f.suffix.lower() in MESH_SUFFIXES for f in d.iterdir()))
-    if nested:
-        return "the meshes are one level down: pass " + " or ".join(str(d) for d in nested[:3])
-    return "pass a folder of meshes, or the mesh files themselves"

@@ -72,6 +72,10 @@ def load_models(path, model_class, params_class):
         raise CloudFileError(path, "no such library file" if not path.exists() else "not a file", _FIX)
     if path.stat().st_size == 0:
         raise CloudFileError(path, "the file is empty (0 bytes)", _FIX)
+    with open(path, "rb") as f:
+        magic = f.read(4)
+    if magic != b"PK\x03\x04":  # numpy's own message for other files invites unpickling them
+        raise CloudFileError(path, "not a psorr model library (not an .npz archive)", _FIX)
     try:
         data = np.load(path, allow_pickle=False)
         if not isinstance(data, np.lib.npyio.NpzFile):

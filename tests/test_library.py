@@ -140,7 +140,7 @@ def test_not_a_library_is_a_clear_error(tmp_path):
 
 
 def test_a_folder_without_meshes_names_the_subfolder_that_has_them(tmp_path):
-    from psorr.library import library_from_arguments
+    from psorr.library_sources import library_from_arguments
     (tmp_path / "meshes").mkdir()
     trimesh.creation.box(extents=(0.1, 0.06, 0.04)).export(tmp_path / "meshes" / "block.stl")
     (tmp_path / "empty").mkdir()
@@ -231,7 +231,7 @@ def test_a_mesh_file_of_another_format_says_so(tmp_path):
 
 
 def test_an_empty_or_mixed_in_saved_library_is_named(tmp_path):
-    from psorr.library import library_from_arguments
+    from psorr.library_sources import library_from_arguments
 
     (tmp_path / "empty.npz").write_bytes(b"")
     with pytest.raises(CloudFileError, match="empty.npz: the file is empty"):

@@ -8,7 +8,8 @@ import pytest
 import trimesh
 
 from psorr.errors import CloudFileError
-from psorr.library import ModelLibrary, TrainParams, library_from_arguments
+from psorr.library import ModelLibrary, TrainParams
+from psorr.library_sources import library_from_arguments
 
 
 @pytest.fixture(autouse=True)
@@ -93,3 +94,23 @@ def test_a_single_path_or_a_folder_is_not_a_list_of_meshes(tmp_path, block):
         ModelLibrary.from_meshes(str(block))
     with pytest.raises(CloudFileError, match="is a folder"):
         ModelLibrary.from_meshes([tmp_path])
+    with pytest.raises(Exception, match=r"glob\('\*.stl'\).*library_from_arguments"):
+        ModelLibrary.from_meshes(tmp_path)
+
+
+def test_a_generator_of_mesh_paths_trains_like_a_list(block):
+    # The checks before training once spent the generator: "no mesh files given".
+    assert ModelLibrary.from_meshes(p for p in [block]).names == ["block"]
+
+
+def test_a_library_is_saved_as_npz_and_a_mesh_or_text_is_not_loaded_as_one(tmp_path, block):
+    lib = ModelLibrary.from_meshes([block])
+    with pytest.raises(CloudFileError, match=r"lib.txt: .*must end in .npz.*save to lib.npz"):
+        lib.save(tmp_path / "lib.txt")
+    assert not (tmp_path / "lib.txt").exists()
+    with pytest.raises(CloudFileError, match=r"block.stl: is a mesh.*from_meshes"):
+        ModelLibrary.load(block)
+    (tmp_path / "notes.npz").write_text("not numpy at all")
+    with pytest.raises(CloudFileError, match=r"notes.npz: not a psorr model library \(not an .npz archive\)") as caught:
+        ModelLibrary.load(tmp_path / "notes.npz")
+    assert "pickle" not in str(caught.value)  # numpy's message invites unpickling an untrusted file
