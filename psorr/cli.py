@@ -106,7 +106,7 @@ def _recognize(args) -> int:
     from tqdm import tqdm
 
     from psorr.io import read_cloud
-    from psorr.library import library_from_arguments
+    from psorr.library_sources import library_from_arguments
     from psorr.recognize import Recognizer
     from psorr.recognize_params import RecognizeParams
 
@@ -151,8 +151,9 @@ def build_parser() -> argparse.ArgumentParser:
     dec.add_argument("--out", metavar="LABELS.npy", help="write one int64 primitive index per input point (-1: none)")
     dec.add_argument("--json", action="store_true", help="print one JSON line instead of a table")
     dec.add_argument("--png", metavar="PICTURE.png", help="render the cloud coloured by primitive")
-    dec.add_argument("--voxel-size", type=float, default=None,
-                     help=f"working resolution in metres (default {DEFAULT_VOXEL_SIZE})")
+    dec.add_argument("--voxel-size", type=voxel_metres, default=None,
+                     help=f"working resolution in metres (default {DEFAULT_VOXEL_SIZE}), from 0.001 to 0.1; "
+                          "time grows about as its inverse square: minutes for a 640x480 cloud at 0.002")
     dec.add_argument("--seed", type=seed, default=0, help="seed of the RANSAC sampling (default 0)")
     dec.set_defaults(run=_decompose)
     rec = sub.add_parser("recognize", help="find CAD-trained workpieces and their poses in a depth cloud")
@@ -188,6 +189,19 @@ def _whole_number(text: str, least: int, what: str, most: int | None = None) -> 
 def seed(text: str) -> int:
     """An argparse type: a seed, which numpy's generators take only as a whole number >= 0."""
     return _whole_number(text, 0, "a seed")
+
+
+def voxel_metres(text: str) -> float:
+    """An argparse type: a voxel size in metres, from 1 mm to 10 cm. Under a millimetre no depth sensor's
+    points fill voxels (a cloud of 5 clumps gave 0 primitives at 1e-6 m); beyond 10 cm a voxel holds a part."""
+    try:
+        size = float(text)
+    except ValueError:
+        size = float("nan")
+    if not 0.001 <= size <= 0.1:
+        raise argparse.ArgumentTypeError(f"expected a voxel size in metres from 0.001 to 0.1, got {text!r} (the "
+                                         f"default is {DEFAULT_VOXEL_SIZE}; a value in millimetres is 1000x too big)")
+    return size
 
 
 def at_least_one(text: str) -> int:

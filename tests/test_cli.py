@@ -51,19 +51,21 @@ def test_a_cloud_too_small_to_decompose_is_named_with_the_fix(tmp_path):
     out = _run("decompose", str(few))
     assert out.returncode == 2 and "Traceback" not in out.stderr
     assert "few.xyz" in out.stderr and "3 finite points" in out.stderr
-    scene = synthetic.box_on_table(np.random.default_rng(0))
-    path = tmp_path / "scene.npy"
-    np.save(path, scene.cloud.points)
-    coarse = _run("decompose", str(path), "--voxel-size", "5")
-    assert coarse.returncode == 2 and "scene.npy" in coarse.stderr and "smaller --voxel-size" in coarse.stderr
+    rng = np.random.default_rng(0)  # many points in five clumps: five voxels
+    path = tmp_path / "clumps.npy"
+    np.save(path, np.repeat(rng.uniform(-0.1, 0.1, (5, 3)) + [0, 0, 1], 100, axis=0) + rng.normal(0, 1e-4, (500, 3)))
+    coarse = _run("decompose", str(path))
+    assert coarse.returncode == 2 and "clumps.npy" in coarse.stderr and "smaller --voxel-size" in coarse.stderr
 
 
 def test_voxel_size_zero_is_refused_not_taken_for_the_default(tmp_path):
     scene = synthetic.box_on_table(np.random.default_rng(0))
     path = tmp_path / "scene.npy"
     np.save(path, scene.cloud.points)
-    out = _run("decompose", str(path), "--voxel-size", "0")
-    assert out.returncode == 2 and "voxel_size must be > 0" in out.stderr
+    for size in ("0", "-1", "nan", "inf", "5"):  # 5: millimetres, 1000x too big
+        out = _run("decompose", str(path), "--voxel-size", size)
+        assert out.returncode == 2 and f"--voxel-size: expected a voxel size in metres from 0.001 to 0.1, got " \
+            f"'{size}'" in out.stderr
 
 
 def test_help_states_the_decomposition_default_voxel_size():
