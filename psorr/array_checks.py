@@ -72,8 +72,8 @@ def rigid_pose(value, name: str) -> np.ndarray:
     """``value`` as a read-only (4, 4) float array, checked to be a rigid transform."""
     pose = np.array(value, dtype=np.float64)
     if pose.shape != (4, 4) or not np.isfinite(pose).all():
-        raise InvalidInputError(f"Detection.{name} must be a finite (4, 4) array, got shape {pose.shape}")
+        raise InvalidInputError(f"{name} must be a finite (4, 4) array, got shape {pose.shape}")
     if not np.allclose(pose[3], (0, 0, 0, 1)) or not np.allclose(pose[:3, :3] @ pose[:3, :3].T, np.eye(3), atol=1e-6):
-        raise InvalidInputError(f"Detection.{name} must be a rigid transform (orthonormal rotation, last row 0 0 0 1)")
+        raise InvalidInputError(f"{name} must be a rigid transform (orthonormal rotation, last row 0 0 0 1)")
     pose.setflags(write=False)
     return pose

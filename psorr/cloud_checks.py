@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from psorr.array_checks import rigid_pose
 from psorr.errors import InvalidInputError
 from psorr.types import PointCloud
 
@@ -83,3 +84,20 @@ def require_seen_from_origin(cloud: PointCloud, what: str) -> None:
             angle = 2 * np.degrees(np.arctan(slope))
             raise InvalidInputError(f"{what}: its points spread over a {angle:.0f} degree view from the origin, "
                                     f"wider than any depth sensor's; {fix}")
+
+
+def require_sensor_pose(value, what: str) -> np.ndarray:
+    """``value`` as a read-only (4, 4) rigid pose in a sensor's frame, in metres: refused (naming ``what``)
+    when it is not one, or puts the model's origin beyond SENSOR_RANGE_LIMIT, as a translation in
+    millimetres does. ICP from such a pose finds nothing, and would say nothing."""
+    T = np.asarray(value, dtype=float)
+    if T.shape != (4, 4) or not np.isfinite(T).all():
+        raise InvalidInputError(f"{what} must be a finite (4, 4) pose, got "
+                                f"{'shape ' + str(T.shape) if T.shape != (4, 4) else 'NaN or inf in it'}")
+    T = rigid_pose(T, what)
+    distance = float(np.linalg.norm(T[:3, 3]))
+    if distance > SENSOR_RANGE_LIMIT:
+        raise InvalidInputError(f"{what} puts the part {distance:.4g} m from the sensor, beyond any depth sensor's "
+                                f"{SENSOR_RANGE_LIMIT:g} m: poses are in metres (a translation in millimetres: "
+                                "divide it by 1000)")
+    return T

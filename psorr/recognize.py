@@ -28,7 +28,7 @@ from psorr import param_checks as check
 from psorr.ambiguity import NearSymmetryResolver
 from psorr.array_checks import random_generator
 from psorr.claims import PixelClaims, SearchTally
-from psorr.cloud_checks import require_seen_from_origin
+from psorr.cloud_checks import require_seen_from_origin, require_sensor_pose
 from psorr.continuation import on_larger_object
 from psorr.decomposition import decompose
 from psorr.decomposition.detail import decompose_leftovers
@@ -111,10 +111,7 @@ class Recognizer:
             raise InvalidInputError(f"refine() takes a psorr.PointCloud, got {type(cloud).__name__}")
         require_seen_from_origin(cloud, "refine(): the cloud")
         m = self.library.model(model)
-        T = np.asarray(T_cloud_model, dtype=float)
-        if T.shape != (4, 4) or not np.isfinite(T).all():
-            raise InvalidInputError(f"T_cloud_model must be a finite (4, 4) pose, got "
-                                    f"{'shape ' + str(T.shape) if T.shape != (4, 4) else 'NaN or inf in it'}")
+        T = require_sensor_pose(T_cloud_model, "refine()'s T_cloud_model")
         view = SceneView(cloud)
         return self._resolved(view, m, self._fine_icp(view, m, self._coarse_icp(view, m, T)))
 

@@ -243,8 +243,8 @@ class Detection:
     alternatives: tuple = ()
 
     def __post_init__(self):
-        object.__setattr__(self, "T_cloud_model", rigid_pose(self.T_cloud_model, "T_cloud_model"))
-        object.__setattr__(self, "alternatives", tuple(rigid_pose(P, f"alternatives[{k}]")
+        object.__setattr__(self, "T_cloud_model", rigid_pose(self.T_cloud_model, "Detection.T_cloud_model"))
+        object.__setattr__(self, "alternatives", tuple(rigid_pose(P, f"Detection.alternatives[{k}]")
                                                        for k, P in enumerate(self.alternatives)))
         for name in ("score", "visible_fraction"):
             value = float(getattr(self, name))

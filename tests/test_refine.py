@@ -40,6 +40,12 @@ def test_refine_names_the_models_it_knows_and_wants_a_pose(library, catalog):
         Recognizer(library).refine(scene.cloud, "chassis", np.eye(3))
     with pytest.raises(InvalidInputError, match="got NaN or inf in it"):
         Recognizer(library).refine(scene.cloud, "chassis", np.full((4, 4), np.nan))
+    with pytest.raises(InvalidInputError, match="T_cloud_model must be a rigid transform"):
+        Recognizer(library).refine(scene.cloud, "chassis", 2 * np.eye(4))
+    in_millimetres = np.eye(4)
+    in_millimetres[:3, 3] = (12.0, -40.0, 850.0)
+    with pytest.raises(InvalidInputError, match="851 m from the sensor.*divide it by 1000"):
+        Recognizer(library).refine(scene.cloud, "chassis", in_millimetres)
 
 
 def test_a_detection_checks_its_alternatives_like_its_pose():
