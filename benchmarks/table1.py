@@ -33,7 +33,7 @@ from pathlib import Path
 import _single_core  # noqa: F401  (must precede numpy)
 import numpy as np
 from table1_report import METHODS, cells, plot, summary, table_markdown
-from table1_views import FULL_SPACING, full_view, partial_view, thin_organised, thin_voxel
+from table1_views import table1_cases
 from tqdm import tqdm
 
 from psorr import ModelLibrary, Recognizer
@@ -84,31 +84,22 @@ def score(result, name: str, T_true, library, catalog) -> dict:
 def run(objects, views, seeds, library, catalog) -> list[dict]:
     meshes = {n: catalog[n].load_mesh() for n in catalog}
     recognizers = {m: Recognizer(library, method=m, params=RecognizeParams()) for m in METHODS}
-    jobs = [(o, v, s) for o in objects for v in views for s in seeds]
     runs = []
-    bar = tqdm(total=len(jobs) * 2 * len(METHODS), desc="table 1 runs", file=sys.stderr)
-    for name, view, seed in jobs:
-        rng = np.random.default_rng(seed)
-        if view == "full":
-            cloud, T_true = full_view(rng, meshes[name])
-            thinned, _ = thin_voxel(cloud, FULL_SPACING)
-        else:
-            cloud, T_true = partial_view(rng, meshes, name)
-            thinned = thin_organised(cloud)
-        for resolution, c in (("full res", cloud), ("1/4 res", thinned)):
-            n_points = int(c.valid_mask.sum())
-            n_part = int((c.labels == 1).sum()) if c.labels is not None else -1
-            for method in METHODS:
-                bar.set_postfix_str(f"{name} {view} {resolution} {method} seed {seed}")
-                result = recognizers[method].recognize(c, np.random.default_rng(seed))
-                s = result.stats
-                runs.append(dict(object=name, view=view, resolution=resolution, points=n_points,
-                                 part_points=n_part, method=method, seed=seed, hypotheses=s.hypotheses,
-                                 verify_ms_per_hypothesis=s.verify_ms_per_hypothesis,
-                                 decomposition_ms=s.decomposition_ms, total_ms=s.total_ms,
-                                 detections=[d.model for d in result.detections],
-                                 **score(result, name, T_true, library, catalog)))
-                bar.update()
+    bar = tqdm(total=len(objects) * len(views) * len(seeds) * 2 * len(METHODS), desc="table 1 runs", file=sys.stderr)
+    for name, view, seed, resolution, c, T_true in table1_cases(meshes, objects, views, seeds):
+        n_points = int(c.valid_mask.sum())
+        n_part = int((c.labels == 1).sum()) if c.labels is not None else -1
+        for method in METHODS:
+            bar.set_postfix_str(f"{name} {view} {resolution} {method} seed {seed}")
+            result = recognizers[method].recognize(c, np.random.default_rng(seed))
+            s = result.stats
+            runs.append(dict(object=name, view=view, resolution=resolution, points=n_points,
+                             part_points=n_part, method=method, seed=seed, hypotheses=s.hypotheses,
+                             verify_ms_per_hypothesis=s.verify_ms_per_hypothesis,
+                             decomposition_ms=s.decomposition_ms, total_ms=s.total_ms,
+                             detections=[d.model for d in result.detections],
+                             **score(result, name, T_true, library, catalog)))
+            bar.update()
     bar.close()
     return runs
 

@@ -99,3 +99,20 @@ def thin_organised(cloud: PointCloud) -> PointCloud:
     keep = keep.ravel()
     labels = None if cloud.labels is None else cloud.labels[keep]
     return PointCloud(cloud.points[keep], labels=labels, width=(w + 1) // 2, height=(h + 1) // 2)
+
+
+def table1_cases(meshes: dict, objects, views, seeds):
+    """Table 1's clouds: for each object, view ("full" or "partial") and seed, the view as is and thinned,
+    as (object, view, seed, resolution ("full res" or "1/4 res"), PointCloud, T_camera_model)."""
+    for name in objects:
+        for view in views:
+            for seed in seeds:
+                rng = np.random.default_rng(seed)
+                if view == "full":
+                    cloud, T_true = full_view(rng, meshes[name])
+                    thinned, _ = thin_voxel(cloud, FULL_SPACING)
+                else:
+                    cloud, T_true = partial_view(rng, meshes, name)
+                    thinned = thin_organised(cloud)
+                yield name, view, seed, "full res", cloud, T_true
+                yield name, view, seed, "1/4 res", thinned, T_true

@@ -31,7 +31,7 @@ from pathlib import Path
 import _single_core  # noqa: F401  (must precede numpy)
 import numpy as np
 from table1 import OBJECTS
-from table1_views import FULL_SPACING, full_view, partial_view, thin_organised, thin_voxel
+from table1_views import table1_cases
 from timing import best_of
 from tqdm import tqdm
 
@@ -75,22 +75,6 @@ class Recorder:
         psorr.recognize.check_poses = points  # PSORR's single-face and single-cylinder screening
         psorr.orr.check_poses = points
         self.box_scores, self.check_poses = box_scores, check_poses
-
-
-def cases(meshes, seeds):
-    """(label, cloud) of Table 1's 12 cases per seed."""
-    for name in OBJECTS:
-        for view in ("full", "partial"):
-            for seed in seeds:
-                rng = np.random.default_rng(seed)
-                if view == "full":
-                    cloud, _ = full_view(rng, meshes[name])
-                    thinned, _ = thin_voxel(cloud, FULL_SPACING)
-                else:
-                    cloud, _ = partial_view(rng, meshes, name)
-                    thinned = thin_organised(cloud)
-                yield f"{name} {view} full res seed {seed}", cloud, seed
-                yield f"{name} {view} 1/4 res seed {seed}", thinned, seed
 
 
 class Compiled:
@@ -277,9 +261,10 @@ def main(argv=None) -> int:
     compiled = Compiled(library, recognizers["psorr"]._pair_candidates._model_prims)
     measured_ms, measured_n = {"psorr": 0.0, "orr": 0.0}, {"psorr": 0, "orr": 0}
     rows = {}
-    bar = tqdm(list(cases(meshes, seeds)), desc="recording Table 1's cases", file=sys.stderr)
-    for label, cloud, seed in bar:
-        bar.set_postfix_str(label)
+    bar = tqdm(list(table1_cases(meshes, OBJECTS, ("full", "partial"), seeds)), desc="recording Table 1's cases",
+               file=sys.stderr)
+    for name, view, seed, resolution, cloud, _ in bar:
+        bar.set_postfix_str(f"{name} {view} {resolution} seed {seed}")
         for method, recognizer in recognizers.items():
             recorder.method = method
             stats = recognizer.recognize(cloud, np.random.default_rng(seed)).stats
