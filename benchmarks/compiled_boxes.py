@@ -10,8 +10,8 @@ mean of the best share per primitive.
 The exact volume clips each of the 12 faces of the two boxes by the other box's six half-spaces
 (Sutherland-Hodgman) and sums the cones from box A's centre over the clipped facets (divergence
 theorem). psorr.box_batch does the same sum with extra care for faces that are (nearly) coplanar,
-which this prototype leaves out: there a shared facet counts twice. verify_compiled.py reports how
-many scores that moves.
+which this prototype leaves out: there a shared facet would count twice. verify_compiled.py reports the
+largest difference from the library's scores (3e-15 over Table 1's 72 runs: no such pair arose).
 """
 
 from __future__ import annotations
