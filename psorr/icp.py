@@ -60,7 +60,10 @@ def point_to_plane(source: np.ndarray, target: np.ndarray, target_normals: np.nd
         if paired.sum() < 6:
             break
         p, q, n = moved[paired] - centre, target[nearest[paired]] - centre, target_normals[nearest[paired]]
-        J = np.column_stack([np.cross(p, n) / scale, n])  # d(residual) / d(turn x scale, slide)
+        # d(residual) / d(turn x scale, slide). The cross product p x n written out: np.cross spent 13% of this
+        # function on axis handling, for the same numbers.
+        px, py, pz, nx, ny, nz = p[:, 0], p[:, 1], p[:, 2], n[:, 0], n[:, 1], n[:, 2]
+        J = np.column_stack([(py * nz - pz * ny) / scale, (pz * nx - px * nz) / scale, (px * ny - py * nx) / scale, n])
         r = np.einsum("ij,ij->i", p - q, n)
         H = J.T @ J
         # The prior holds the start: what the planes do not constrain stays where the start put it.

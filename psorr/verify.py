@@ -98,8 +98,7 @@ class SceneView:
     """A depth buffer of a cloud from its sensor origin, plus an Open3D copy for ICP."""
 
     def __init__(self, cloud: PointCloud, icp_voxel: float = 0.004):
-        pts = cloud.points[cloud.valid_mask]
-        pts = pts[pts[:, 2] > 1e-3]
+        pts = cloud.points[cloud.valid_mask & (cloud.points[:, 2] > 1e-3)]  # one copy, not two: 3 ms at 640x480
         self.points = pts
         ux, uy = pts[:, 0] / pts[:, 2], pts[:, 1] / pts[:, 2]
         self.focal = buffer_focal(cloud, ux, uy)
@@ -111,9 +110,7 @@ class SceneView:
         # symmetry) held different samples in 74% of their cells, and both were reported.
         self.claim_block = max(_CLAIM_BLOCK, round(_CLAIM_BLOCK * self.focal / KINECT_FOCAL))
         u, v, _ = self.project(pts)
-        depth = np.full(self.width * self.height, np.inf)
-        np.minimum.at(depth, v * self.width + u, pts[:, 2])  # the nearest point wins each pixel
-        self.depth = depth
+        self.depth = _nearest_per_pixel(self.width * self.height, v * self.width + u, pts[:, 2])
         down = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(pts)).voxel_down_sample(icp_voxel)
         self.down = down
         self.down_tree = o3d.geometry.KDTreeFlann(down)
@@ -215,6 +212,19 @@ class SceneView:
         v = np.round(self.focal * points[:, 1] / z + self.cy).astype(np.int64)
         inside = (u >= 0) & (u < self.width) & (v >= 0) & (v < self.height) & (points[:, 2] > 1e-3)
         return np.clip(u, 0, self.width - 1), np.clip(v, 0, self.height - 1), inside
+
+
+def _nearest_per_pixel(size: int, pixel: np.ndarray, z: np.ndarray) -> np.ndarray:
+    """(size,) the least of the depths ``z`` (N,) that fall in each pixel (flat indices (N,)), inf in the
+    others: np.minimum.at's result. That takes 12-19 ms for a 640x480 image, and most pixels hold one point
+    (all of an organised cloud's at its own focal length): those are written directly, and only pixels
+    holding more go through minimum.at."""
+    depth = np.full(size, np.inf)
+    alone = np.bincount(pixel, minlength=size)[pixel] == 1
+    depth[pixel[alone]] = z[alone]
+    if not alone.all():
+        np.minimum.at(depth, pixel[~alone], z[~alone])
+    return depth
 
 
 def _estimate_normals(cloud: o3d.geometry.PointCloud, radius: float, max_nn: int) -> None:
