@@ -12,6 +12,7 @@ import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
 from psorr.columns import column_max, column_min
+from psorr.rotations import cross
 from psorr.types import OrientedBox
 
 
@@ -19,15 +20,9 @@ def orthonormal_frame(axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Two unit vectors (3,) that make a right-handed frame with the unit ``axis`` (3,)."""
     helper = (1.0, 0.0, 0.0) if abs(axis[0]) < 0.9 else (0.0, 1.0, 0.0)
     a = axis.tolist()
-    u = _cross(a, helper)
+    u = cross(a, helper)
     u /= np.linalg.norm(u)
-    return u, _cross(a, u.tolist())
-
-
-def _cross(a, b) -> np.ndarray:
-    """a x b of two 3-vectors given as sequences of floats: np.cross's arithmetic, term for term, so the same
-    bits, without its 50 microseconds of axis handling (a decomposition builds a hundred frames)."""
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+    return u, cross(a, u.tolist())
 
 
 def min_area_rectangle(xy: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:

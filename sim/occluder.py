@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from psorr.errors import InvalidInputError
+from psorr.rotations import cross  # not np.cross: the person is posed 50 times a second
 
 PREFIX = "human/"
 SEGMENTS = ("torso", "upper_arm", "forearm", "hand")
@@ -165,18 +166,13 @@ def _unit(v) -> np.ndarray:
     return np.asarray(v, dtype=float) / np.linalg.norm(v)
 
 
-def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    # np.cross costs ~15 us of argument handling on 3-vectors; the person is posed 50 times a second.
-    return np.array([u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]])
-
-
 def _capsule(a, b) -> np.ndarray:
     """Pose (4, 4) of a capsule from point a to b: origin at the midpoint, z along a -> b."""
     z = _unit(np.asarray(b, dtype=float) - a)
     ref = np.array([0.0, 0.0, 1.0]) if abs(z[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
-    x = _unit(_cross(ref, z))
+    x = _unit(cross(ref, z))
     T = np.eye(4)
-    T[:3, :3] = np.column_stack([x, _cross(z, x), z])
+    T[:3, :3] = np.column_stack([x, cross(z, x), z])
     T[:3, 3] = (np.asarray(a, dtype=float) + b) / 2
     return T
 

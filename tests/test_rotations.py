@@ -1,10 +1,10 @@
-"""psorr.rotations: numpy conversions between rotation matrices and rotation vectors."""
+"""psorr.rotations: numpy conversions between rotation matrices and rotation vectors, and the cross product."""
 
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from psorr.rotations import from_rotation_vector, rotation_vector, turn
+from psorr.rotations import cross, from_rotation_vector, rotation_vector, turn
 
 
 @pytest.mark.parametrize("scale", [0.0, 1e-9, 1e-5, 0.3, 2.0, np.pi - 2e-3, np.pi - 1e-4, np.pi])
@@ -24,3 +24,10 @@ def test_conversions_agree_with_scipy_from_no_turn_to_a_half_turn(scale):
 
 def test_a_quarter_turn_about_z_takes_x_to_y():
     np.testing.assert_allclose(turn(np.array([0.0, 0.0, 1.0]), np.pi / 2) @ [1.0, 0, 0], [0, 1.0, 0], atol=1e-15)
+
+
+def test_cross_is_np_cross_to_the_bit():
+    rng = np.random.default_rng(0)
+    a, b = rng.normal(size=(50, 3)), rng.normal(size=(50, 3))
+    assert np.array_equal(cross(a.T, b.T).T, np.cross(a, b))
+    assert np.array_equal(cross(a[0].tolist(), b[0].tolist()), np.cross(a[0], b[0]))
