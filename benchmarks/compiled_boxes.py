@@ -19,8 +19,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-_TOL = 1e-11  # as psorr.box_overlap._TOL
+from psorr.box_overlap import _TOL  # the library's slack for "inside" and "separated"
+
 _MAXV = 16  # a rectangle clipped by 6 half-spaces has at most 10 vertices
+_EYE, _ZERO = np.eye(3), np.zeros(3)  # A's frame, in itself
 _RECT_U = np.array([-1.0, 1.0, 1.0, -1.0])  # a face's corners in cyclic order
 _RECT_V = np.array([-1.0, -1.0, 1.0, 1.0])
 
@@ -121,9 +123,16 @@ def _facets(h_own, axes, centre, h_other, M_other, t_other, buf_a, buf_b, normal
 
 
 @njit(cache=True)
+def _scratch():
+    """pair_ratio's working space: two polygon buffers, a face normal and a clipping plane."""
+    return np.zeros((3, _MAXV, 3))
+
+
+@njit(cache=True)
 def pair_ratio(ca, Ra, ea, cb, Rb, eb, thickness, scratch):
     """vol(A n B) / vol(A) of two boxes (centres (3,), rotations (3, 3), full extents (3,) m), each
-    thickened to at least ``thickness`` m, as psorr.box_batch.intersection_ratios."""
+    thickened to at least ``thickness`` m, as psorr.box_batch.intersection_ratios. ``scratch`` is
+    _scratch()'s working space."""
     ha, hb = np.empty(3), np.empty(3)
     for k in range(3):
         ha[k] = max(ea[k], thickness) / 2
@@ -135,8 +144,7 @@ def pair_ratio(ca, Ra, ea, cb, Rb, eb, thickness, scratch):
     _mat_mat(Ra, Rb, M, True)  # B's axes in A's frame
     for r in range(3):
         t[r] = Ra[0, r] * (cb[0] - ca[0]) + Ra[1, r] * (cb[1] - ca[1]) + Ra[2, r] * (cb[2] - ca[2])
-    eye, zero = scratch[0], scratch[1]
-    buf_a, buf_b, normal, plane_a = scratch[2], scratch[3], scratch[4, 0], scratch[4, 1]
+    buf_a, buf_b, normal, plane_a = scratch[0], scratch[1], scratch[2, 0], scratch[2, 1]
     b_in_a, a_in_b = True, True
     for sx in (-1.0, 1.0):
         for sy in (-1.0, 1.0):
@@ -154,8 +162,8 @@ def pair_ratio(ca, Ra, ea, cb, Rb, eb, thickness, scratch):
     if a_in_b:
         return 1.0
     # Cones from A's centre (the frame's origin): 1/3 sum of area x signed height over P's facets.
-    volume = (_facets(ha, eye[:3, :3], zero[0], hb, M, t, buf_a, buf_b, normal, plane_a)
-              + _facets(hb, M, t, ha, eye[:3, :3], zero[0], buf_a, buf_b, normal, plane_a)) / 3
+    volume = (_facets(ha, _EYE, _ZERO, hb, M, t, buf_a, buf_b, normal, plane_a)
+              + _facets(hb, M, t, ha, _EYE, _ZERO, buf_a, buf_b, normal, plane_a)) / 3
     volume = min(max(volume, 0.0), min(vol_a, vol_b))
     return volume / vol_a
 
@@ -198,8 +206,7 @@ def box_scores(centers, rotations, extents, is_plane, direction, radius, weight,
     primitives are the s_ arrays."""
     H, S = len(poses), len(s_centers)
     scores = np.zeros(H)
-    scratch = np.zeros((5, _MAXV, 3))
-    scratch[0, :3, :3] = np.eye(3)
+    scratch = _scratch()
     R, t = np.empty((3, 3)), np.empty(3)
     c, d, rot = np.empty(3), np.empty(3), np.empty((3, 3))
     tmp_t, tmp_R = np.empty(3), np.empty((3, 3))
@@ -237,8 +244,7 @@ def box_scores(centers, rotations, extents, is_plane, direction, radius, weight,
 @njit(cache=True)
 def pair_ratios(ca, Ra, ea, cb, Rb, eb, thickness):
     """(N,) pair_ratio of N box pairs (rows of the arrays), as psorr.box_batch.intersection_ratios."""
-    scratch = np.zeros((5, _MAXV, 3))
-    scratch[0, :3, :3] = np.eye(3)
+    scratch = _scratch()
     out = np.empty(len(ca))
     for i in range(len(ca)):
         out[i] = pair_ratio(ca[i], Ra[i], ea[i], cb[i], Rb[i], eb[i], thickness, scratch)
