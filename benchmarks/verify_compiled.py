@@ -137,11 +137,13 @@ def exact_pairs(recorder, repeats) -> dict:
                 recorder.box_scores(*args, **kwargs)
     finally:
         psorr.box_score.intersection_ratios = original
-    n = sum(len(p[0]) for p in pairs)
-    numpy_ms = sum(best_of(repeats, lambda p=p: original(*p))[1] for p in pairs)
-    compiled_ms = sum(best_of(repeats, lambda p=p: compiled_boxes.pair_ratios(*p))[1] for p in pairs)
-    worst = max((float(np.abs(original(*p) - compiled_boxes.pair_ratios(*p)).max(initial=0)) for p in pairs),
-                default=0.0)
+    n, numpy_ms, compiled_ms, worst = sum(len(p[0]) for p in pairs), 0.0, 0.0, 0.0
+    for p in pairs:
+        expected, ms = best_of(repeats, lambda p=p: original(*p))
+        numpy_ms += ms
+        got, ms = best_of(repeats, lambda p=p: compiled_boxes.pair_ratios(*p))
+        compiled_ms += ms
+        worst = max(worst, float(np.abs(expected - got).max(initial=0.0)))
     per_pair = 1e3 / max(n, 1)
     return dict(pairs=n, numpy_us_per_pair=numpy_ms * per_pair, compiled_us_per_pair=compiled_ms * per_pair,
                 max_ratio_diff=worst)
