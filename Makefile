@@ -4,6 +4,7 @@ PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
+BENCH_STAMP := $(VENV)/.bench-installed
 # open3d needs libusb and libgomp at import time; MuJoCo's headless renderer
 # needs EGL (GPU-less Mesa) with OSMesa as the fallback.
 SYSTEM_LIBS := libusb-1.0-0 libgomp1 libegl1 libgl1 libegl-mesa0 libgl1-mesa-dri libosmesa6
@@ -36,8 +37,11 @@ demo: setup
 	$(BIN)/psorr-sim run tasks/demo.yaml --episodes 2 --seed 0 --occluder on --record out/demo
 
 # The benchmarks compare with peers in one run: the bench extra brings OpenCV's PPF and numba.
-bench: setup
+$(BENCH_STAMP): pyproject.toml | $(STAMP)
 	$(BIN)/pip install -q -e ".[bench]"
+	touch $(BENCH_STAMP)
+
+bench: setup $(BENCH_STAMP)
 	$(BIN)/python benchmarks/decompose.py
 	$(BIN)/python benchmarks/kernels.py
 	$(BIN)/python benchmarks/osd_false_positives.py
