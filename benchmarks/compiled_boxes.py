@@ -1,4 +1,5 @@
-"""PSORR's box verification (psorr.box_score.box_scores) compiled with numba, for benchmarks/verify_compiled.py.
+"""PSORR's box verification (psorr.verification.box_score.box_scores) compiled with numba, for
+benchmarks/verify_compiled.py.
 
 Not part of the library: it answers one question, whether compiling both verifications would give
 PSORR the issue's 50x over ORR per hypothesis. It computes what box_scores computes, hypothesis by
@@ -9,7 +10,7 @@ mean of the best share per primitive.
 
 The exact volume clips each of the 12 faces of the two boxes by the other box's six half-spaces
 (Sutherland-Hodgman) and sums the cones from box A's centre over the clipped facets (divergence
-theorem). psorr.box_batch does the same sum with extra care for faces that are (nearly) coplanar,
+theorem). psorr.geometry.box_batch does the same sum with extra care for faces that are (nearly) coplanar,
 which this prototype leaves out: there a shared facet would count twice. verify_compiled.py reports the
 largest difference from the library's scores (3e-15 over Table 1's 72 runs: no such pair arose).
 """
@@ -19,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from psorr.box_overlap import _TOL  # the library's slack for "inside" and "separated"
+from psorr.geometry.box_overlap import _TOL  # the library's slack for "inside" and "separated"
 
 _MAXV = 16  # a rectangle clipped by 6 half-spaces has at most 10 vertices
 _EYE, _ZERO = np.eye(3), np.zeros(3)  # A's frame, in itself
@@ -131,7 +132,7 @@ def _scratch():
 @njit(cache=True)
 def pair_ratio(ca, Ra, ea, cb, Rb, eb, thickness, scratch):
     """vol(A n B) / vol(A) of two boxes (centres (3,), rotations (3, 3), full extents (3,) m), each
-    thickened to at least ``thickness`` m, as psorr.box_batch.intersection_ratios. ``scratch`` is
+    thickened to at least ``thickness`` m, as psorr.geometry.box_batch.intersection_ratios. ``scratch`` is
     _scratch()'s working space."""
     ha, hb = np.empty(3), np.empty(3)
     for k in range(3):
@@ -202,7 +203,7 @@ def box_scores(centers, rotations, extents, is_plane, direction, radius, weight,
                poses, owners, s_centers, s_rotations, s_extents, s_is_plane, s_direction, s_radius,
                thickness, cos_agree, radius_tolerance):
     """(H,) scores of H poses (H, 4, 4), pose h of model owners[h] whose primitives are rows
-    offsets[m]:offsets[m + 1] of the library arrays (see psorr.box_score.PrimitiveArrays); the scene's
+    offsets[m]:offsets[m + 1] of the library arrays (see psorr.verification.box_score.PrimitiveArrays); the scene's
     primitives are the s_ arrays."""
     H, S = len(poses), len(s_centers)
     scores = np.zeros(H)
@@ -243,7 +244,7 @@ def box_scores(centers, rotations, extents, is_plane, direction, radius, weight,
 
 @njit(cache=True)
 def pair_ratios(ca, Ra, ea, cb, Rb, eb, thickness):
-    """(N,) pair_ratio of N box pairs (rows of the arrays), as psorr.box_batch.intersection_ratios."""
+    """(N,) pair_ratio of N box pairs (rows of the arrays), as psorr.geometry.box_batch.intersection_ratios."""
     scratch = _scratch()
     out = np.empty(len(ca))
     for i in range(len(ca)):

@@ -1,4 +1,5 @@
-"""ORR's point check (psorr.point_check.check_poses) compiled with numba, for benchmarks/verify_compiled.py.
+"""ORR's point check (psorr.verification.point_check.check_poses) compiled with numba, for
+benchmarks/verify_compiled.py.
 
 Not part of the library (see compiled_boxes.py for the question it answers). Pose by pose, in one
 compiled loop, it does what check_poses does: every k-th model sample (at most about max_points) is
@@ -13,9 +14,9 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from psorr.kinect_noise import KINECT_V1
+from psorr.sensing.kinect_noise import KINECT_V1
 
-_SELF_BLOCK = 4  # as psorr.verify._SELF_BLOCK
+_SELF_BLOCK = 4  # as psorr.verification.scene_view._SELF_BLOCK
 _BASE, _QUAD, _Z0 = KINECT_V1.sigma_base, KINECT_V1.sigma_quad, KINECT_V1.sigma_z0
 _STEP = KINECT_V1.disparity_step_px / (525.0 * abs(KINECT_V1.baseline))  # quantisation step / z^2
 
@@ -33,7 +34,7 @@ def check_poses(depth, nearby, width, height, focal, cx, cy, plane, has_plane, p
     """(P, 5) int64 counts (visible, support, violation, occluded, support above the table) of P poses
     (P, 4, 4), pose k of the model whose samples are rows offsets[m]:offsets[m + 1] of points, normals
     (N, 3), m = owners[k]; depth and nearby (width x height,) are the view's buffers
-    (psorr.verify.SceneView.depth and .nearby_depth)."""
+    (psorr.verification.scene_view.SceneView.depth and .nearby_depth)."""
     P = len(poses)
     out = np.zeros((P, 5), dtype=np.int64)
     bw = width // _SELF_BLOCK + 1

@@ -1,7 +1,7 @@
 """Decomposition on real Kinect clouds (the OSD learn set), PSORR against an
 Open3D segment_plane loop, on one core.
 
-Each labelled object is scored once (coverage and purity, see psorr.metrics),
+Each labelled object is scored once (coverage and purity, see psorr.synthetic.metrics),
 because the table dominates the points and whole-cloud figures flatter a
 plane-removal loop. Prints a per-scene table and a summary against the
 targets, and writes a plot and one decomposition picture.
@@ -23,10 +23,10 @@ from timing import best_of
 from tqdm import tqdm
 
 from psorr.decomposition import DecomposeParams, decompose
-from psorr.io import read_cloud
-from psorr.metrics import osd_object_ids, segmentation_scores
-from psorr.render import save_decomposition_png
+from psorr.io.clouds import read_cloud
+from psorr.synthetic.metrics import osd_object_ids, segmentation_scores
 from psorr.types import PointCloud
+from psorr.viz.render import save_decomposition_png
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_OSD = ROOT.parent / "shared" / "osd" / "learn"

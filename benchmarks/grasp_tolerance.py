@@ -41,7 +41,7 @@ from scipy.spatial.transform import Rotation
 from tqdm import tqdm
 
 from psorr.errors import PsorrError
-from psorr.workpieces import load_catalog
+from psorr.synthetic.catalog import load_catalog
 from sim.pick import PLACE_TOL_DEG, PLACE_TOL_MM, pick_and_place
 from sim.world import WorldConfig, build_world
 

@@ -1,10 +1,10 @@
 """Two kernels every recognition leans on, timed against a peer each, on one core:
 
-- reading a Kinect PCD: psorr.io.read_cloud against Open3D's read_point_cloud, on the OSD
+- reading a Kinect PCD: psorr.io.clouds.read_cloud against Open3D's read_point_cloud, on the OSD
   learn0.pcd when the data set is beside the repo, else on a seeded 640x480 organised cloud
   written here in each PCD encoding (ascii, binary, binary_compressed);
 - the exact volume of two oriented boxes' intersection (box verification, PSORR section 2.1.4):
-  psorr.box_overlap one pair at a time, psorr.box_batch many pairs at once, and scipy's Qhull
+  psorr.geometry.box_overlap one pair at a time, psorr.geometry.box_batch many pairs at once, and scipy's Qhull
   (HalfspaceIntersection of the 12 half-spaces, then ConvexHull), with the largest difference
   between them.
 
@@ -32,9 +32,9 @@ from scipy.spatial.transform import Rotation
 from timing import best_of
 from tqdm import tqdm
 
-from psorr.box_batch import intersection_ratios
-from psorr.box_overlap import boxes_may_overlap, intersection_volume
-from psorr.io import read_cloud, write_cloud
+from psorr.geometry.box_batch import intersection_ratios
+from psorr.geometry.box_overlap import boxes_may_overlap, intersection_volume
+from psorr.io.clouds import read_cloud, write_cloud
 from psorr.types import OrientedBox, PointCloud
 
 ROOT = Path(__file__).resolve().parents[1]

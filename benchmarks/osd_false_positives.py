@@ -1,5 +1,5 @@
 """False detections on real Kinect clouds that hold none of our parts, PSORR and ORR, on one core;
-each also with the continuation check off (RecognizeParams.max_continued=None, psorr.continuation),
+each also with the continuation check off (RecognizeParams.max_continued=None, psorr.acceptance.continuation),
 to show what the check removes.
 
 The OSD learn set's 45 clouds show boxes, stacked boxes, occluded objects and cylinders on a table.
@@ -22,11 +22,11 @@ import _single_core  # noqa: F401  (must precede numpy)
 import numpy as np
 from tqdm import tqdm
 
-from psorr.io import read_cloud
-from psorr.library import ModelLibrary
+from psorr.io.clouds import read_cloud
+from psorr.library.models import ModelLibrary
 from psorr.recognize import Recognizer
 from psorr.recognize_params import RecognizeParams
-from psorr.workpieces import load_catalog
+from psorr.synthetic.catalog import load_catalog
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_OSD = ROOT.parent / "shared" / "osd" / "learn"
@@ -46,7 +46,7 @@ def _picture(path: Path, shown, library, columns: int = 4) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from psorr.render import draw_detections
+    from psorr.viz.render import draw_detections
 
     rows = -(-len(shown) // columns)
     fig, axes = plt.subplots(rows, columns, figsize=(3.2 * columns, 3.2 * rows), squeeze=False)

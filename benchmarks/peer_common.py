@@ -11,9 +11,9 @@ import trimesh
 from scipy.spatial import cKDTree
 
 from psorr.errors import InvalidInputError
-from psorr.open3d_threads import limited_threads
+from psorr.geometry.open3d_threads import limited_threads
+from psorr.synthetic.catalog import symmetric_add
 from psorr.types import PointCloud
-from psorr.workpieces import symmetric_add
 
 # ---------------------------------------------------------------- shared steps
 
@@ -153,8 +153,8 @@ def grade(scene, detections, catalog, samples, diameters) -> tuple[int, int]:
 def catalog_library():
     """The catalog, its meshes (name -> trimesh), the library of all its parts (trained or cached), and per
     model name its ADD samples (every 10th surface point) and diameter (m): what grading needs."""
-    from psorr.library import ModelLibrary
-    from psorr.workpieces import load_catalog
+    from psorr.library.models import ModelLibrary
+    from psorr.synthetic.catalog import load_catalog
 
     catalog = load_catalog()
     meshes = {name: catalog[name].load_mesh() for name in sorted(catalog)}
@@ -166,7 +166,7 @@ def catalog_library():
 def clutter_scene(seed: int, catalog, meshes, intrinsics=None):
     """The seeded 4-part clutter scene ``seed`` with the capsule occluder (the parts drawn by seed, the
     layout, camera and noise by 1000 + seed)."""
-    from psorr.scenes import workpiece_scene
+    from psorr.synthetic.workpiece_scenes import workpiece_scene
 
     names = list(np.random.default_rng(seed).choice(sorted(catalog), size=4, replace=False))
     return workpiece_scene(np.random.default_rng(1000 + seed), meshes, names, intrinsics=intrinsics, occluder=True)

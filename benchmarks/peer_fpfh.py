@@ -30,8 +30,8 @@ from peer_common import (
 from scipy.spatial import cKDTree
 
 from psorr.errors import InvalidInputError
+from psorr.synthetic.catalog import model_diameter
 from psorr.types import Detection, PointCloud
-from psorr.workpieces import model_diameter
 
 _REG = o3d.pipelines.registration
 

@@ -26,8 +26,8 @@ from peer_common import (
 from scipy.spatial import cKDTree
 
 from psorr.errors import InvalidInputError, PsorrError
+from psorr.synthetic.catalog import model_diameter
 from psorr.types import Detection, PointCloud
-from psorr.workpieces import model_diameter
 
 
 class OpencvPpfParams:

@@ -28,7 +28,7 @@ from tqdm import tqdm
 
 from psorr.errors import PsorrError
 from psorr.recognize import Recognizer
-from psorr.scenes import workpiece_scene
+from psorr.synthetic.workpiece_scenes import workpiece_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 TARGETS = {"single": 0.95, "clutter": 0.85}

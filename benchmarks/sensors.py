@@ -25,8 +25,8 @@ import numpy as np
 from peer_common import catalog_library, clutter_scene, grade
 from tqdm import tqdm
 
-from psorr.camera import CameraIntrinsics
 from psorr.recognize import Recognizer
+from psorr.sensing.camera import CameraIntrinsics
 from psorr.types import PointCloud
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -5,8 +5,8 @@ Cases, per object (chassis, transformer, circuit_board) and seed:
 - full view: an unorganised cloud of the whole posed model surface (evenly
   sampled, 1 mm Gaussian noise) standing on a noisy patch of table top, in
   the sensor frame of a camera 0.65-0.8 m above the table (the same seeded
-  geometry as psorr.scenes);
-- partial view: the seeded Kinect-v1 rendering of psorr.scenes.
+  geometry as psorr.synthetic.workpiece_scenes);
+- partial view: the seeded Kinect-v1 rendering of psorr.synthetic.workpiece_scenes.
 Each at two resolutions: as is, and thinned to about a quarter of the points
 (one point per voxel of twice the sampling spacing for the full view; every
 2nd row and column for the organised partial view).
@@ -38,7 +38,7 @@ from tqdm import tqdm
 
 from psorr import ModelLibrary, Recognizer
 from psorr.recognize import RecognizeParams
-from psorr.workpieces import load_catalog, symmetric_add, symmetry_transforms
+from psorr.synthetic.catalog import load_catalog, symmetric_add, symmetry_transforms
 
 ROOT = Path(__file__).resolve().parents[1]
 OBJECTS = ("chassis", "transformer", "circuit_board")

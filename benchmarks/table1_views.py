@@ -9,8 +9,8 @@ import numpy as np
 import trimesh
 from scipy.spatial import Delaunay
 
-from psorr.camera import look_at
-from psorr.scenes import workpiece_scene
+from psorr.sensing.camera import look_at
+from psorr.synthetic.workpiece_scenes import workpiece_scene
 from psorr.types import PointCloud
 
 FULL_SPACING = 0.0015        # m: full-view sampling, about a Kinect v1 pixel at 0.7-0.8 m
@@ -19,7 +19,7 @@ TABLE_PATCH = 0.4            # m: side of the table-top patch around the part in
 
 
 def _camera_and_pose(rng: np.random.Generator):
-    """A part pose on the table (random yaw and place) and a camera as in psorr.scenes:
+    """A part pose on the table (random yaw and place) and a camera as in psorr.synthetic.workpiece_scenes:
     0.65-0.8 m above the table, 20-30 deg from the vertical. Returns (T_world_model, T_world_camera)."""
     x, y, yaw = rng.uniform(-0.1, 0.1), rng.uniform(0.0, 0.2), rng.uniform(0, 2 * np.pi)
     T_world_model = trimesh.transformations.rotation_matrix(yaw, (0, 0, 1))
@@ -65,7 +65,7 @@ def full_view(rng: np.random.Generator, mesh: trimesh.Trimesh):
 
 
 def partial_view(rng: np.random.Generator, meshes: dict, name: str):
-    """(organised Kinect-v1 PointCloud, T_camera_model) from psorr.scenes."""
+    """(organised Kinect-v1 PointCloud, T_camera_model) from psorr.synthetic.workpiece_scenes."""
     scene = workpiece_scene(rng, meshes, [name])
     return scene.cloud, scene.instances[0].T_camera_model
 

@@ -6,8 +6,8 @@ temporary is large beside a few box pairs, so that ratio might measure numpy rat
 This benchmark answers it by running Table 1's cases (both methods, all 8 models in the library),
 recording every verification call each makes:
 
-- PSORR: the box scores of its pair hypotheses (psorr.box_score.box_scores) and the coarse point
-  check of its single-face and single-cylinder poses (psorr.point_check.check_poses);
+- PSORR: the box scores of its pair hypotheses (psorr.verification.box_score.box_scores) and the coarse point
+  check of its single-face and single-cylinder poses (psorr.verification.point_check.check_poses);
 - ORR: the point check of its random-pair hypotheses (check_poses),
 
 and timing each recorded call again in numpy (the library's code) and compiled with numba
@@ -35,15 +35,15 @@ from table1_views import table1_cases
 from timing import best_of
 from tqdm import tqdm
 
-import psorr.box_score
-import psorr.orr
-import psorr.pair_candidates
-import psorr.point_check
+import psorr.hypotheses.orr
+import psorr.hypotheses.pairs
 import psorr.recognize
+import psorr.verification.box_score
+import psorr.verification.point_check
 from psorr import ModelLibrary, Recognizer
-from psorr.box_score import _COS_AGREE, _concatenated
-from psorr.primitive_match import RADIUS_TOLERANCE
-from psorr.workpieces import load_catalog
+from psorr.hypotheses.primitive_match import RADIUS_TOLERANCE
+from psorr.synthetic.catalog import load_catalog
+from psorr.verification.box_score import _COS_AGREE, _concatenated
 
 try:
     import compiled_boxes
@@ -61,7 +61,7 @@ class Recorder:
     def __init__(self):
         self.calls = {"psorr": [], "orr": []}
         self.method = None
-        box_scores, check_poses = psorr.pair_candidates.box_scores, psorr.point_check.check_poses
+        box_scores, check_poses = psorr.hypotheses.pairs.box_scores, psorr.verification.point_check.check_poses
 
         def boxes(*args, **kwargs):
             self.calls[self.method].append(("boxes", args, kwargs))
@@ -71,9 +71,9 @@ class Recorder:
             self.calls[self.method].append(("points", args, kwargs))
             return check_poses(*args, **kwargs)
 
-        psorr.pair_candidates.box_scores = boxes
+        psorr.hypotheses.pairs.box_scores = boxes
         psorr.recognize.check_poses = points  # PSORR's single-face and single-cylinder screening
-        psorr.orr.check_poses = points
+        psorr.hypotheses.orr.check_poses = points
         self.box_scores, self.check_poses = box_scores, check_poses
 
 
@@ -123,20 +123,20 @@ def same_results(kind, numpy_result, compiled_result) -> tuple[float, int]:
 
 def exact_pairs(recorder, repeats) -> dict:
     """The box pairs PSORR's box scores intersect exactly (those that agree and overlap), per hypothesis,
-    and what one costs in numpy (psorr.box_batch, batched) and compiled: the floor of a box score."""
-    pairs, original = [], psorr.box_score.intersection_ratios
+    and what one costs in numpy (psorr.geometry.box_batch, batched) and compiled: the floor of a box score."""
+    pairs, original = [], psorr.verification.box_score.intersection_ratios
 
     def keep(*args):
         pairs.append(args)
         return original(*args)
 
-    psorr.box_score.intersection_ratios = keep
+    psorr.verification.box_score.intersection_ratios = keep
     try:
         for kind, args, kwargs in recorder.calls["psorr"]:
             if kind == "boxes":
                 recorder.box_scores(*args, **kwargs)
     finally:
-        psorr.box_score.intersection_ratios = original
+        psorr.verification.box_score.intersection_ratios = original
     n, numpy_ms, compiled_ms, worst = sum(len(p[0]) for p in pairs), 0.0, 0.0, 0.0
     for p in pairs:
         expected, ms = best_of(repeats, lambda p=p: original(*p))
@@ -195,7 +195,7 @@ def report(rows, pairs, measured, seeds, out_dir: Path) -> str:
               f"| compiled PSORR against numpy ORR (languages, not methods) | {ratio['mixed']:.2f} | {TARGET:.0f} |",
               "", f"A box-scored PSORR hypothesis needs {per_hypothesis:.1f} exact box intersections (of the pairs "
               f"that agree and overlap; {pairs['pairs']} in all). One costs {pairs['numpy_us_per_pair']:.1f} us "
-              f"in numpy (psorr.box_batch, batched) and {pairs['compiled_us_per_pair']:.1f} us compiled (same "
+              f"in numpy (psorr.geometry.box_batch, batched) and {pairs['compiled_us_per_pair']:.1f} us compiled (same "
               f"ratios within {pairs['max_ratio_diff']:.1e}), so they alone cost a box-scored hypothesis "
               f"{floor:.1f} us compiled. {TARGET:.0f}x under the compiled point check would be "
               f"{o['compiled_us'] / TARGET:.2f} us a hypothesis, "

@@ -6,7 +6,7 @@ graph; recognise CAD-trained workpieces from it. Never imports the simulator.
 
 from psorr.decomposition import DecomposeParams, Decomposition, decompose
 from psorr.errors import CloudFileError, InvalidInputError, PsorrError
-from psorr.library import ModelLibrary
+from psorr.library.models import ModelLibrary
 from psorr.recognize import Recognizer
 from psorr.recognize_params import RecognizeParams
 from psorr.types import Detection, OrientedBox, PointCloud, Primitive, PrimitiveKind, PrimitiveShapeGraph

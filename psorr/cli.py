@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from psorr.cloud_checks import require_seen_from_origin, require_sensor_metres
+from psorr.checks.clouds import require_seen_from_origin, require_sensor_metres
 from psorr.errors import CloudFileError, InvalidInputError, PsorrError
 
 # DecomposeParams.voxel_size, which a test holds this to: importing the pipeline for --help costs a second.
@@ -51,7 +51,7 @@ def _log(message: str) -> None:
 
 def _decompose(args) -> int:
     from psorr.decomposition import DecomposeParams, decompose
-    from psorr.io import read_cloud
+    from psorr.io.clouds import read_cloud
 
     check_output(args.out, "--out", ".npy")
     check_output(args.png, "--png", ".png")
@@ -71,7 +71,7 @@ def _decompose(args) -> int:
         np.save(out, result.labels.astype(np.int64))
         _log(f"wrote {len(result.labels)} labels to {out}")
     if args.png:
-        from psorr.render import save_decomposition_png
+        from psorr.viz.render import save_decomposition_png
 
         save_decomposition_png(args.png, cloud, result.labels, graph,
                                title=f"{Path(args.cloud).name}: {len(graph)} primitives, "
@@ -105,8 +105,8 @@ def _decompose(args) -> int:
 def _recognize(args) -> int:
     from tqdm import tqdm
 
-    from psorr.io import read_cloud
-    from psorr.library_sources import library_from_arguments
+    from psorr.io.clouds import read_cloud
+    from psorr.library.sources import library_from_arguments
     from psorr.recognize import Recognizer
     from psorr.recognize_params import RecognizeParams
 
@@ -121,7 +121,7 @@ def _recognize(args) -> int:
     result = Recognizer(library, method=args.method, params=params).recognize(cloud, np.random.default_rng(args.seed))
     stats = result.stats
     if args.png:
-        from psorr.render import save_detections_png
+        from psorr.viz.render import save_detections_png
 
         save_detections_png(args.png, cloud, result.detections, library)
         _log(f"wrote overlay to {args.png}")

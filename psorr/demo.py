@@ -15,12 +15,12 @@ from pathlib import Path
 import numpy as np
 
 from psorr.decomposition import DecomposeParams, decompose
-from psorr.io import read_cloud, write_cloud
-from psorr.metrics import osd_object_ids, segmentation_scores
-from psorr.render import save_decomposition_png
-from psorr.scenes import workpiece_scene
+from psorr.io.clouds import read_cloud, write_cloud
+from psorr.synthetic.catalog import load_catalog
+from psorr.synthetic.metrics import osd_object_ids, segmentation_scores
+from psorr.synthetic.workpiece_scenes import workpiece_scene
 from psorr.types import PrimitiveKind
-from psorr.workpieces import load_catalog
+from psorr.viz.render import save_decomposition_png
 
 ROOT = Path(__file__).resolve().parents[1]
 OUT = ROOT / "out" / "demo"
@@ -51,10 +51,10 @@ def _recognise(cloud, scene, catalog) -> None:
     """Recognise the scene's parts with all 8 catalog models and score each detection."""
     from tqdm import tqdm
 
-    from psorr.library import ModelLibrary
+    from psorr.library.models import ModelLibrary
     from psorr.recognize import Recognizer
-    from psorr.render import save_detections_png
-    from psorr.workpieces import symmetric_add
+    from psorr.synthetic.catalog import symmetric_add
+    from psorr.viz.render import save_detections_png
 
     paths = [catalog[name].mesh_path for name in sorted(catalog)]
     library = ModelLibrary.from_meshes(

@@ -9,7 +9,7 @@ how each is screened:
   vote, and screens each by intersecting model and scene primitive boxes
   (section 2.1.4). Once detections explain some parts, it pairs again among
   the primitives they leave unexplained, then tries single faces and long
-  cylinders (psorr.single_plane, psorr.single_cylinder). Points still
+  cylinders (psorr.hypotheses.single_plane, psorr.hypotheses.single_cylinder). Points still
   standing on the table unexplained, in part-sized groups, are decomposed again
   at a finer voxel and searched the same way.
 - ORR (Papazov and Burschka) pairs random oriented scene points and screens
@@ -24,28 +24,29 @@ from dataclasses import replace
 import numpy as np
 from scipy.spatial import cKDTree
 
-from psorr import param_checks as check
-from psorr.ambiguity import NearSymmetryResolver
-from psorr.array_checks import random_generator
-from psorr.claims import PixelClaims, SearchTally
-from psorr.cloud_checks import require_seen_from_origin, require_sensor_pose
-from psorr.continuation import on_larger_object
+from psorr.acceptance.ambiguity import NearSymmetryResolver
+from psorr.acceptance.claims import PixelClaims, SearchTally
+from psorr.acceptance.continuation import on_larger_object
+from psorr.acceptance.icp import refine_icp
+from psorr.acceptance.unexplained import blanked, on_detected_surface, part_sized, standing_points, standing_unexplained
+from psorr.checks import params as check
+from psorr.checks.arrays import random_generator
+from psorr.checks.clouds import require_seen_from_origin, require_sensor_pose
 from psorr.decomposition import decompose
 from psorr.decomposition.detail import decompose_leftovers
+from psorr.decomposition.support_crop import crop_to_parts, floats_above
 from psorr.errors import InvalidInputError, TooSparseError
-from psorr.library import ModelLibrary
-from psorr.orr import orr_hypotheses
-from psorr.pair_candidates import PairCandidates
-from psorr.point_check import CheckParams, check_pose, check_poses
-from psorr.pose_clusters import same_pose, share_out
-from psorr.ppf import scene_oriented_points
+from psorr.hypotheses.orr import orr_hypotheses
+from psorr.hypotheses.pairs import PairCandidates
+from psorr.hypotheses.pose_clusters import same_pose, share_out
+from psorr.hypotheses.single_cylinder import SingleCylinderMatcher
+from psorr.hypotheses.single_plane import SinglePlaneMatcher
+from psorr.library.models import ModelLibrary
+from psorr.library.ppf import scene_oriented_points
 from psorr.recognize_params import METHODS, Recognition, RecognitionStats, RecognizeParams
-from psorr.single_cylinder import SingleCylinderMatcher
-from psorr.single_plane import SinglePlaneMatcher
-from psorr.support_crop import crop_to_parts, floats_above
 from psorr.types import Detection, PointCloud, PrimitiveKind
-from psorr.unexplained import blanked, on_detected_surface, part_sized, standing_points, standing_unexplained
-from psorr.verify import SceneView, refine_icp
+from psorr.verification.point_check import CheckParams, check_pose, check_poses
+from psorr.verification.scene_view import SceneView
 
 _COARSE = CheckParams(max_points=300)
 _TABLE_EXTENT = 1.2  # in diameters of the largest model: a primitive larger than this is the table

@@ -4,14 +4,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from psorr import param_checks as check
-from psorr.continuation import ContinuationParams
+from psorr.acceptance.continuation import ContinuationParams
+from psorr.checks import params as check
 from psorr.decomposition import DecomposeParams
-from psorr.point_check import CheckParams
-from psorr.single_cylinder import SingleCylinderParams
-from psorr.single_plane import SinglePlaneParams
-from psorr.support_crop import SupportCropParams
+from psorr.decomposition.support_crop import SupportCropParams
+from psorr.hypotheses.single_cylinder import SingleCylinderParams
+from psorr.hypotheses.single_plane import SinglePlaneParams
 from psorr.types import Detection
+from psorr.verification.point_check import CheckParams
 
 METHODS = ("psorr", "orr")
 
@@ -47,7 +47,7 @@ class RecognizeParams:
     max_float: float | None = 0.02      # a part's lowest point this far above the supporting plane is no part
     max_shared_pixels: float = 0.3      # a detection sharing more of its pixels with a better one is dropped
     # A pose around whose outline more of the measured surface than this goes on in its faces' planes sits on a
-    # larger object (psorr.continuation): an L bracket in a box's corner. None turns the check off (it costs
+    # larger object (psorr.acceptance.continuation): an L bracket in a box's corner. None turns the check off (it costs
     # about 2 ms a scene); parts flush with larger objects (stacked edge to edge, in a fitting corner) need it
     # off. Measured in the README, "Real clouds that hold none of our parts".
     max_continued: float | None = 0.2

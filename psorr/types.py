@@ -13,7 +13,7 @@ from functools import cached_property
 
 import numpy as np
 
-from psorr.array_checks import UNIT_TOLERANCE, frozen_array, integer_labels, not_unit, rigid_pose
+from psorr.checks.arrays import UNIT_TOLERANCE, frozen_array, integer_labels, not_unit, rigid_pose
 from psorr.errors import InvalidInputError
 
 

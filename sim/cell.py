@@ -21,7 +21,7 @@ from sim.ik import ArmIK, T_world_site, UnreachableTargetError
 from sim.world import World
 
 if TYPE_CHECKING:  # perception.py imports this module's users; only the annotations need these
-    from psorr.library import ModelLibrary
+    from psorr.library.models import ModelLibrary
     from sim.perception import Look
 
 RAMP_S = 0.8  # s a move's joint-space ramp lasts

@@ -34,11 +34,11 @@ def _perceive(args) -> int:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from psorr.kinect_noise import KINECT_V1
-    from psorr.library import ModelLibrary
+    from psorr.library.models import ModelLibrary
     from psorr.recognize import Recognizer
-    from psorr.render import save_detections_png
-    from psorr.workpieces import symmetric_add
+    from psorr.sensing.kinect_noise import KINECT_V1
+    from psorr.synthetic.catalog import symmetric_add
+    from psorr.viz.render import save_detections_png
     from sim.episode import pose_error
     from sim.sensor import DepthCamera
     from sim.world import WorldConfig, build_world

@@ -46,7 +46,7 @@ import numpy as np
 from gymnasium import spaces
 
 from psorr.errors import InvalidInputError, PsorrError
-from psorr.kinect_noise import KINECT_V1
+from psorr.sensing.kinect_noise import KINECT_V1
 from sim.cell import WorkspaceBlockedError
 from sim.episode import MAX_EPISODE_S, MIN_SCORE, POSE_MODES, Episode
 from sim.grasp_planning import upright_equivalent

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from psorr.workpieces import Grasp
+from psorr.synthetic.catalog import Grasp
 from sim.cell import ArmCell
 from sim.ik import UnreachableTargetError
 

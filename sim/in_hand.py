@@ -17,9 +17,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from psorr.camera import CameraIntrinsics
-from psorr.depth_compare import DepthRenderer, differs
-from psorr.kinect_noise import KINECT_V1
+from psorr.sensing.camera import CameraIntrinsics
+from psorr.sensing.kinect_noise import KINECT_V1
+from psorr.verification.depth_compare import DepthRenderer, differs
 from sim.cell import ArmCell
 from sim.grasp_planning import angle_deg
 from sim.ik import UnreachableTargetError

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from psorr.errors import InvalidInputError
-from psorr.rotations import cross  # not np.cross: the person is posed 50 times a second
+from psorr.geometry.rotations import cross  # not np.cross: the person is posed 50 times a second
 
 PREFIX = "human/"
 SEGMENTS = ("torso", "upper_arm", "forearm", "hand")

@@ -23,9 +23,9 @@ from typing import NamedTuple
 import mujoco
 import numpy as np
 
-from psorr.camera import CameraIntrinsics
 from psorr.errors import InvalidInputError
-from psorr.kinect_noise import KINECT_V1
+from psorr.sensing.camera import CameraIntrinsics
+from psorr.sensing.kinect_noise import KINECT_V1
 from psorr.types import Detection, PointCloud
 from sim.ik import T_world_site
 from sim.sensor import DepthCamera, SensorFrame, T_world_camera_opencv, depth_and_bodies
@@ -101,7 +101,7 @@ class Perception:
 
     @property
     def library(self):
-        """The recognizer's :class:`psorr.library.ModelLibrary`, or None when not recognising."""
+        """The recognizer's :class:`psorr.library.models.ModelLibrary`, or None when not recognising."""
         return self._recognizer.library if self._recognizer is not None else None
 
     # -------------------------------------------------------------------------------- looking
@@ -225,7 +225,7 @@ _RECOGNIZERS: dict[tuple, object] = {}
 
 def _recognizer(world: World):
     """A PSORR recognizer for every catalog part (trained once per process; cached on disk by psorr)."""
-    from psorr.library import ModelLibrary
+    from psorr.library.models import ModelLibrary
     from psorr.recognize import Recognizer
 
     paths = tuple(str(world.catalog[n].mesh_path) for n in sorted(world.catalog))

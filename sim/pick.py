@@ -15,7 +15,7 @@ import mujoco
 import numpy as np
 
 from psorr.errors import InvalidInputError
-from psorr.workpieces import symmetry_transforms
+from psorr.synthetic.catalog import symmetry_transforms
 from sim.cell import ArmCell, WorkspaceBlockedError
 from sim.grasp_planning import (
     LIFT,

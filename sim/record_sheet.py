@@ -69,7 +69,7 @@ def project_points(points: np.ndarray, T_camera_model: np.ndarray, world: World,
 
 
 def write_sheet(path: Path, rows: list[SheetRow], title: str) -> None:
-    """Rows of (Kinect RGB, depth with models, grasp close-up); models drawn as psorr.render draws detections."""
+    """Rows of (Kinect RGB, depth with models, grasp close-up); models drawn as psorr.viz.render draws detections."""
     import matplotlib
 
     matplotlib.use("Agg")  # headless: the sheet goes to a file, never to a window

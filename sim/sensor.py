@@ -6,7 +6,7 @@ between them; everything else (the world's ``T_world_camera``, the frames' cloud
 
 Depth. ``mujoco.Renderer`` returns z-depth in metres: the distance along the optical axis, not
 along the pixel's ray (tests/test_world.py checks it on a fronto-parallel plane). That is what
-:func:`psorr.camera.depth_to_cloud` and the noise model expect.
+:func:`psorr.sensing.camera.depth_to_cloud` and the noise model expect.
 
 Rendering is headless: :func:`sim.render_backend.ensure_headless_gl` picks EGL or OSMesa before
 the renderer is made.
@@ -20,9 +20,9 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from psorr.camera import CameraIntrinsics, depth_to_cloud
 from psorr.errors import InvalidInputError
-from psorr.kinect_noise import KinectNoise, kinect_noise_with_source
+from psorr.sensing.camera import CameraIntrinsics, depth_to_cloud
+from psorr.sensing.kinect_noise import KinectNoise, kinect_noise_with_source
 from psorr.types import PointCloud
 from sim.render_backend import ensure_headless_gl
 

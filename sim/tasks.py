@@ -23,7 +23,7 @@ def load_task(path) -> Task:
     """Read a YAML task; bad files and unknown keys or parts raise an error naming the file and the fix."""
     import yaml
 
-    from psorr.workpieces import load_catalog
+    from psorr.synthetic.catalog import load_catalog
 
     path = Path(path)
     if path.is_dir():

@@ -30,7 +30,7 @@ import mujoco
 import numpy as np
 
 from psorr.errors import InvalidInputError
-from psorr.workpieces import WorkpieceInfo, load_catalog
+from psorr.synthetic.catalog import WorkpieceInfo, load_catalog
 from sim.built_world import HOME_KEY, World, pose_matrix, quat_of
 from sim.layout import WorldBuildError, place_parts, yaw_matrix
 from sim.occluder import RADII, ReachSchedule, occluder_pose, segment_half_lengths

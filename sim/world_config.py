@@ -5,8 +5,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from psorr.camera import CameraIntrinsics
 from psorr.errors import InvalidInputError
+from psorr.sensing.camera import CameraIntrinsics
 from sim.sensor import KINECT_V1_CAMERA, check_intrinsics
 
 
@@ -15,7 +15,7 @@ class WorldConfig:
     """What to build (metres, degrees, seconds).
 
     Attributes:
-        workpieces: catalog part names to place, each once (``psorr.workpieces.load_catalog()``).
+        workpieces: catalog part names to place, each once (``psorr.synthetic.catalog.load_catalog()``).
         table_size: (x, y) of the table top; the arm stands at the -x edge.
         table_height: height of the table top above the floor.
         arm_inset: distance of the arm's base axis from the table's -x edge.

@@ -4,8 +4,8 @@ import os
 
 import pytest
 
-from psorr.library import ModelLibrary
-from psorr.workpieces import DEFAULT_CATALOG
+from psorr.library.models import ModelLibrary
+from psorr.synthetic.catalog import DEFAULT_CATALOG
 
 
 @pytest.fixture(scope="module")

@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from psorr import shapes
 from psorr.decomposition.hypotheses import support_mask
+from psorr.geometry import shapes
 from psorr.types import PrimitiveKind
 
 

@@ -9,19 +9,19 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from psorr import param_checks as check
-from psorr import shapes
-from psorr.array_checks import random_generator
-from psorr.boxes import box_around_axis
-from psorr.cloud_checks import require_sensor_metres
-from psorr.columns import column_mean
+from psorr.checks import params as check
+from psorr.checks.arrays import random_generator
+from psorr.checks.clouds import require_sensor_metres
 from psorr.decomposition.graphcut import alpha_expansion
 from psorr.decomposition.hypotheses import generate_hypotheses, support_mask
 from psorr.decomposition.merge import Piece, merge_greedy
 from psorr.decomposition.preprocess import Voxelized, preprocess, undirected_edges
 from psorr.decomposition.psg import graph_edges
 from psorr.errors import InvalidInputError
-from psorr.kinect_noise import KINECT_V1
+from psorr.geometry import shapes
+from psorr.geometry.boxes import box_around_axis
+from psorr.geometry.columns import column_mean
+from psorr.sensing.kinect_noise import KINECT_V1
 from psorr.types import PointCloud, Primitive, PrimitiveKind, PrimitiveShapeGraph
 
 

@@ -9,8 +9,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from psorr.columns import column_max, column_min
 from psorr.errors import TooSparseError
+from psorr.geometry.columns import column_max, column_min
 from psorr.types import PointCloud
 
 

@@ -1,0 +1,63 @@
+"""PSORR's pair stage: pose hypotheses from pairs of scene primitives, screened by their boxes.
+
+The oriented points of two scene primitives (plane centroids and normals, cylinder axes) are looked
+up in the model library's hash table; each match gives a pose T = F_model F_scene^-1 (section 2.1.3).
+Matches whose primitives could not be parts of their model primitives (kind, size) are dropped, the
+poses are clustered by vote, and the best of them by box score (section 2.1.4) go on to ICP and
+acceptance.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from psorr.hypotheses.pose_clusters import densest_poses, share_out
+from psorr.hypotheses.primitive_match import PrimitiveSizes
+from psorr.library.models import ModelLibrary
+from psorr.recognize_params import RecognizeParams
+from psorr.verification.box_score import PrimitiveArrays, box_scores
+
+
+class PairCandidates:
+    """The library's models, prepared for pairing: primitive sizes, boxes and centres."""
+
+    def __init__(self, library: ModelLibrary, params: RecognizeParams):
+        self.library, self.params = library, params
+        self.max_diameter = max(m.diameter for m in library.models)
+        self._sizes = PrimitiveSizes(library.models)
+        self._model_centres = np.array([m.points.mean(axis=0) for m in library.models])  # (M, 3), model frames
+        self._model_prims = [PrimitiveArrays.of(m.graph.primitives) for m in library.models]
+
+    def __call__(self, pts: np.ndarray, nrm: np.ndarray, scene_prims) -> tuple[list, int, float]:
+        """Pose hypotheses from pairs of the scene's oriented points (K, 3) and their primitives: matched
+        in the hash table, clustered by vote, and the best by box score. Returns the (model index, pose)
+        candidates, the number of clustered hypotheses, and the ms spent verifying them."""
+        p = self.params
+        poses, models = np.empty((0, 4, 4)), np.empty(0, dtype=np.int64)
+        if len(pts) >= 2:  # pairs need two oriented points
+            i, j = np.nonzero(np.linalg.norm(pts[:, None] - pts[None], axis=2) <= self.max_diameter)
+            keep = i != j
+            i, j = i[keep], j[keep]
+            scene_index, rows = self.library.table.lookup(pts[i], nrm[i], pts[j], nrm[j])
+            scene_index, rows = self._plausible(scene_prims, i, j, scene_index, rows)
+            if len(rows):
+                poses, models = self.library.table.poses(scene_index, rows, pts[i], nrm[i], pts[j])
+                poses, models = densest_poses(poses, models, scene_index, self._model_centres, p.cluster_cell,
+                                              p.max_hypotheses)
+        t1 = time.perf_counter()
+        scores = box_scores(self._model_prims, poses, PrimitiveArrays.of(scene_prims), p.box_thickness, models)
+        order = np.argsort(-scores, kind="stable")
+        order = share_out(order[scores[order] >= p.min_box_score], models, p.refine_top)
+        verify_ms = (time.perf_counter() - t1) * 1e3
+        return [(models[k], poses[k]) for k in order], len(poses), verify_ms
+
+    def _plausible(self, scene_prims, i, j, scene_index, rows):
+        """The lookup matches whose scene primitives could be parts of their model primitives (kind, size)."""
+        table, sizes = self.library.table, self._sizes
+        fits = sizes.compatible(scene_prims)
+        a, b = table.first[rows], table.second[rows]
+        owner = sizes.offsets[table.model[a]]
+        keep = fits[i[scene_index], owner + table.primitive[a]] & fits[j[scene_index], owner + table.primitive[b]]
+        return scene_index[keep], rows[keep]

@@ -1,0 +1,109 @@
+"""Reading triangle meshes (STL, OBJ, PLY) for training, with the checks a CAD export needs.
+
+Every failure caused by the file raises CloudFileError naming it and the fix. What is taken but may
+not be what the user meant is said (a warning): several meshes in one file, trained as one model,
+a mesh turned inside out, trained turned right side out, and a mesh that is not closed.
+"""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from psorr.errors import CloudFileError
+from psorr.io.clouds import require_file, require_suffix
+
+if TYPE_CHECKING:
+    import trimesh
+
+MESH_SUFFIXES = (".stl", ".obj", ".ply")
+
+
+def read_mesh(path) -> trimesh.Trimesh:
+    """Read a triangle mesh from .stl, .obj or .ply (vertices in the file's units).
+
+    A file holding several meshes is concatenated into one (trimesh ``force='mesh'``), with a warning that
+    names them; an inside-out closed mesh is turned right side out, with a warning.
+
+    Raises:
+        CloudFileError: unknown suffix, missing/empty/unparseable file, no faces, or a closed mesh whose
+            faces disagree on which way is out.
+    """
+    import trimesh  # imported here: it is slow to import and only meshes need it
+
+    path = Path(path)
+    require_suffix(path, MESH_SUFFIXES, "mesh")
+    require_file(path)
+    try:
+        # Unprocessed first: processing drops the faces of NaN or inf vertices without a word.
+        scene = trimesh.load_scene(path, process=False)
+        mesh = scene.to_mesh()  # what trimesh.load(force="mesh") does
+    except Exception as exc:  # trimesh's many loaders raise many exception types
+        raise CloudFileError(path, f"cannot be read as a mesh: {type(exc).__name__}: {exc}",
+                             "re-export it as STL, OBJ or PLY") from None
+    names = _object_names(path, scene)
+    if len(names) > 1:
+        warnings.warn(f"{path}: holds {len(names)} meshes ({', '.join(names[:6])}{' ...' if len(names) > 6 else ''}), "
+                      f"trained as one model {path.stem!r}; if they are separate parts, export one file per part",
+                      stacklevel=2)
+    if not isinstance(mesh, trimesh.Trimesh):
+        raise CloudFileError(path, f"holds a {type(mesh).__name__}, not one triangle mesh",
+                             "export a single mesh")
+    broken = int(np.count_nonzero(~np.isfinite(mesh.vertices).all(axis=1)))
+    if broken:
+        raise CloudFileError(path, f"{broken} of its {len(mesh.vertices)} vertices are NaN or infinite",
+                             "repair or re-export the mesh")
+    mesh.process()  # what trimesh.load does by default: merge duplicate vertices
+    if len(mesh.faces) == 0:
+        if len(mesh.vertices) == 0:
+            raise CloudFileError(path, f"holds no faces: it is points or lines only, or empty, truncated, or not a "
+                                       f"{path.suffix.lower()} file", "export the surface as a triangle mesh in the "
+                                 "format its suffix names")
+        raise CloudFileError(path, "the mesh has no faces",
+                             "export the surface, not just its vertices")
+    if not mesh.area > 0:  # every triangle degenerate: nothing to sample a surface from
+        raise CloudFileError(path, f"the mesh's {len(mesh.faces)} faces have no area",
+                             "export the surface; its triangles are collapsed to lines or points")
+    return _wound_outward(path, mesh)
+
+
+def _object_names(path: Path, scene) -> list[str]:
+    """The names of the meshes a file holds: trimesh's, or for an OBJ its ``o`` objects, which trimesh's
+    loader merges into one mesh unless their materials differ."""
+    names = sorted(scene.geometry)
+    if path.suffix.lower() == ".obj":
+        text = path.read_bytes().decode("utf-8", errors="replace")
+        objects = [line[2:].strip() for line in text.splitlines() if line.startswith("o ")]
+        if len(objects) > len(names):
+            names = objects
+    return names
+
+
+def _wound_outward(path: Path, mesh):
+    """``mesh``, turned right side out if it is inside out (said); refused if its faces disagree on which way
+    is out. Models take their normals from the winding: an inside-out export (common from CAD) was found
+    nowhere, and one with a third of its faces flipped scored lower, without a word. Only a closed mesh has
+    an inside to tell outward from; an open one is taken as it is, and said."""
+    if not mesh.is_watertight:
+        import trimesh
+
+        open_edges = len(trimesh.grouping.group_rows(mesh.edges_sorted, require_count=1))
+        warnings.warn(f"{path}: the mesh is not closed ({open_edges} edges border one face only), so nothing tells "
+                      "which way is out: its normals are taken from the faces' winding as exported, and a surface "
+                      "with no back is trained as it is; export the part as a closed solid (watertight STL) to "
+                      "silence this", stacklevel=3)
+        return mesh
+    if not mesh.is_winding_consistent:
+        raise CloudFileError(path, "its faces disagree on which way is out (some are wound against their "
+                                   "neighbours), and a model takes its normals from the winding",
+                             "re-orient the faces coherently (trimesh.repair.fix_normals, or MeshLab's 'Re-Orient "
+                             "all faces coherently') and export it again")
+    if mesh.volume < 0:
+        warnings.warn(f"{path}: the mesh is inside out (every face is wound inward); trained turned right side out; "
+                      "re-export it with outward normals to silence this", stacklevel=3)
+        mesh = mesh.copy()
+        mesh.invert()
+    return mesh
