@@ -24,3 +24,7 @@ class CloudFileError(PsorrError):
         if fix:
             message += f" ({fix})"
         super().__init__(message)
+
+
+class AssetError(CloudFileError):
+    """A file of psorr's package data (the workpiece catalog, a mesh, a collision mesh, the robot MJCF) is missing."""

@@ -17,9 +17,12 @@ from pathlib import Path
 
 import numpy as np
 
+from psorr.assets import asset_path
 from psorr.errors import CloudFileError, InvalidInputError
 
-DEFAULT_CATALOG = Path(__file__).resolve().parents[2] / "assets" / "workpieces" / "catalog.json"
+# The folder comes from the package data, the file is checked when read: a missing catalog gets
+# load_catalog's error and its fix rather than failing `import psorr`.
+DEFAULT_CATALOG = asset_path("workpieces") / "catalog.json"
 CONTINUOUS_STEP_DEG = 2.0  # sampling of rotations about a continuous symmetry axis in symmetric_add
 _UNIT_TOL = 1e-6
 _REBUILD = "rebuild it with: python assets/workpieces/build_workpieces.py"
