@@ -1,9 +1,9 @@
 """`make demo`: decompose a seeded Kinect-like scene of our workpieces (and a
-real Kinect cloud when the OSD set is beside the repo), recognise the parts
-with a library trained from their CAD meshes, print results tables against
-the ground truth and write pictures to out/demo/. `make demo` then runs the
-robot cell's scripted episodes (psorr-sim run tasks/demo.yaml), with this
-recognizer in the loop.
+real Kinect cloud when run from a checkout with the OSD set beside it),
+recognise the parts with a library trained from their CAD meshes, print
+results tables against the ground truth and write pictures to out/demo/ under
+the current directory. `make demo` then runs the robot cell's scripted
+episodes (psorr-sim run tasks/demo.yaml), with this recognizer in the loop.
 """
 
 from __future__ import annotations
@@ -22,9 +22,8 @@ from psorr.synthetic.workpiece_scenes import workpiece_scene
 from psorr.types import PrimitiveKind
 from psorr.viz.render import save_decomposition_png
 
-ROOT = Path(__file__).resolve().parents[1]
-OUT = ROOT / "out" / "demo"
-OSD_SCENE = ROOT.parent / "shared" / "osd" / "learn" / "learn35.pcd"
+OUT = Path("out") / "demo"  # under the current directory: an installed psorr has no repository to write in
+OSD_SCENE = Path("shared") / "osd" / "learn" / "learn35.pcd"  # beside a checkout, not in the package
 SEED = 0
 PARTS = ["chassis", "transformer", "circuit_board", "flanged_hub", "u_channel"]
 # Our parts are 5-14 cm across at ~0.75 m; an 8 mm voxel resolves their
@@ -79,7 +78,35 @@ def _recognise(cloud, scene, catalog) -> None:
     missed = [inst.name for k, inst in enumerate(scene.instances) if k not in found]
     print(f"found {len(found)} of {len(scene.instances)} parts; missed: {', '.join(missed) or 'none'}")
     overlay = save_detections_png(OUT / "workpieces_recognition.png", cloud, result.detections, library)
-    print(f"picture: {overlay.relative_to(ROOT)}")
+    print(f"picture: {overlay}")
+
+
+def _checkout() -> Path | None:
+    """The repository psorr runs from, or None for an installed psorr (no pyproject.toml beside the package)."""
+    root = Path(__file__).resolve().parents[1]
+    return root if (root / "pyproject.toml").is_file() else None
+
+
+def _real_cloud() -> None:
+    """Decompose OSD's learn35 when the OSD set is beside the checkout; say why not otherwise."""
+    checkout = _checkout()
+    if checkout is None:
+        _log("(an installed psorr has no checkout to find the OSD set beside; skipping the real-cloud part)")
+        return
+    path = checkout.parent / OSD_SCENE
+    if not path.is_file():
+        _log(f"(no {path}; skipping the real-cloud part)")
+        return
+    real = read_cloud(path)
+    start = time.perf_counter()
+    real_result = decompose(real)
+    real_ms = (time.perf_counter() - start) * 1e3
+    real_scores = segmentation_scores(osd_object_ids(real.labels), real_result.labels, background=(0, 1))
+    real_picture = save_decomposition_png(OUT / "osd_learn35_decomposition.png", real, real_result.labels,
+                                          real_result.graph, title=f"OSD learn35 (real Kinect): "
+                                          f"{len(real_result.primitives)} primitives, {real_ms:.0f} ms")
+    print(f"real Kinect cloud {path.name}: {len(real_result.primitives)} primitives in {real_ms:.0f} ms, "
+          f"object coverage {real_scores.coverage:.2f}, purity {real_scores.purity:.3f}; picture: {real_picture}")
 
 
 def main() -> int:
@@ -97,7 +124,7 @@ def main() -> int:
     picture = save_decomposition_png(OUT / "workpieces_decomposition.png", cloud, result.labels, result.graph,
                                      title=f"seeded Kinect scene of {len(PARTS)} workpieces: "
                                            f"{len(result.primitives)} primitives, {elapsed:.0f} ms")
-    print(f"\nDecomposition of {cloud_path.relative_to(ROOT)} ({int(cloud.valid_mask.sum())} points, "
+    print(f"\nDecomposition of {cloud_path} ({int(cloud.valid_mask.sum())} points, "
           f"{elapsed:.0f} ms, {len(result.primitives)} primitives, {len(result.graph.edges)} PSG edges, "
           f"voxel {WORKPIECE_PARAMS.voxel_size * 1000:.0f} mm)\n")
     print(f"{'workpiece':<15} {'points':>7} {'planes':>6} {'cylinders':>9} {'coverage':>8}")
@@ -105,22 +132,9 @@ def main() -> int:
         print(f"{name:<15} {n:>7} {planes:>6} {cylinders:>9} {covered:>8.2f}")
     scores = segmentation_scores(cloud.labels, result.labels, background=(0,))
     print(f"{'all objects':<15} {'':>7} {'':>6} {'':>9} {scores.coverage:>8.2f}   purity {scores.purity:.3f}")
-    print(f"\npicture: {picture.relative_to(ROOT)}")
+    print(f"\npicture: {picture}")
     _recognise(cloud, scene, catalog)
-    if OSD_SCENE.exists():
-        real = read_cloud(OSD_SCENE)
-        start = time.perf_counter()
-        real_result = decompose(real)
-        real_ms = (time.perf_counter() - start) * 1e3
-        real_scores = segmentation_scores(osd_object_ids(real.labels), real_result.labels, background=(0, 1))
-        real_picture = save_decomposition_png(OUT / "osd_learn35_decomposition.png", real, real_result.labels,
-                                              real_result.graph, title=f"OSD learn35 (real Kinect): "
-                                              f"{len(real_result.primitives)} primitives, {real_ms:.0f} ms")
-        print(f"real Kinect cloud {OSD_SCENE.name}: {len(real_result.primitives)} primitives in {real_ms:.0f} ms, "
-              f"object coverage {real_scores.coverage:.2f}, purity {real_scores.purity:.3f}; "
-              f"picture: {real_picture.relative_to(ROOT)}")
-    else:
-        _log(f"(no {OSD_SCENE}; skipping the real-cloud part)")
+    _real_cloud()
     return 0
 
 
