@@ -3,7 +3,7 @@
 Each seed builds the task's cell once per mode (the same layout in both) and runs the scripted
 episode: with the true poses (oracle) and with PSORR's poses from the Kinect (recognized). The
 person reaches over the table in both (``--occluder off`` to remove them), so the gap between
-the modes is what recognition costs. Success is judged on the simulator's truth (sim/pick.py).
+the modes is what recognition costs. Success is judged on the simulator's truth (sim/skills/pick.py).
 
 Targets (issue 4): recognized grasp success >= 95% and within 3 points of oracle; place
 success >= 90%; under 20 s of wall time per episode on one core.
@@ -28,8 +28,8 @@ from tqdm import tqdm
 from psorr.errors import PsorrError
 from sim.cli import summarize
 from sim.episode import run_episode
-from sim.tasks import load_task
 from sim.world import build_world
+from sim.world.tasks import load_task
 
 ROOT = Path(__file__).resolve().parents[1]
 MODES = ("oracle", "recognized")

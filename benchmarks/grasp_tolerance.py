@@ -1,7 +1,7 @@
 """How accurate must a pose estimate be for the gripper to pick a part and seat it in its fixture?
 
 For every catalog part, in seeded one-part cells (no human), the simulator's true pose is perturbed
-by a known error and handed to ``sim.pick.pick_and_place`` as the estimate; the pick is judged on
+by a known error and handed to ``sim.skills.pick.pick_and_place`` as the estimate; the pick is judged on
 the simulator's truth. Errors (one kind at a time, the part's origin is the centre of its resting face):
 
 - translation: 2-20 mm in the table plane, along the part's own +x, +y, -x and -y axes;
@@ -42,7 +42,7 @@ from tqdm import tqdm
 
 from psorr.errors import PsorrError
 from psorr.synthetic.catalog import load_catalog
-from sim.pick import PLACE_TOL_DEG, PLACE_TOL_MM, pick_and_place
+from sim.skills.pick import PLACE_TOL_DEG, PLACE_TOL_MM, pick_and_place
 from sim.world import WorldConfig, build_world
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -39,8 +39,8 @@ def _perceive(args) -> int:
     from psorr.sensing.kinect_noise import KINECT_V1
     from psorr.synthetic.catalog import symmetric_add
     from psorr.viz.render import save_detections_png
+    from sim.devices.sensor import DepthCamera
     from sim.episode import pose_error
-    from sim.sensor import DepthCamera
     from sim.world import WorldConfig, build_world
 
     check_output(args.out, "--out")
@@ -88,8 +88,8 @@ def _run(args) -> int:
     from tqdm import tqdm
 
     from sim.episode import run_episode
-    from sim.tasks import load_task
     from sim.world import build_world
+    from sim.world.tasks import load_task
 
     task = load_task(args.task)
     occluder = args.occluder == "on"
@@ -100,7 +100,7 @@ def _run(args) -> int:
         world = build_world(task.world, rng)
         recorder = None
         if args.record:
-            from sim.record import EpisodeRecorder
+            from sim.recording.recorder import EpisodeRecorder
 
             recorder = EpisodeRecorder(Path(args.record), f"episode_{args.seed}_{episode}")
         try:

@@ -47,15 +47,15 @@ from gymnasium import spaces
 
 from psorr.errors import InvalidInputError, PsorrError
 from psorr.sensing.kinect_noise import KINECT_V1
-from sim.cell import WorkspaceBlockedError
+from sim.control.cell import WorkspaceBlockedError
+from sim.devices.render_backend import ensure_headless_gl
 from sim.episode import MAX_EPISODE_S, MIN_SCORE, POSE_MODES, Episode
-from sim.grasp_planning import upright_equivalent
-from sim.perception import Estimate, Look
-from sim.pick import REST_TOL, PickResult
-from sim.render_backend import ensure_headless_gl
+from sim.skills.grasp_planning import upright_equivalent
+from sim.skills.perception import Estimate, Look
+from sim.skills.pick import REST_TOL, PickResult
 from sim.world import World, WorldConfig, build_world
+from sim.world.assets import REPO_ROOT
 
-REPO_ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_TASK = "tasks/demo.yaml"
 GRASP_REWARD, PLACE_REWARD, WAIT_REWARD, REFUSED_REWARD = 1.0, 1.0, -0.01, -0.1
 DEFAULT_MAX_STEPS = 100  # actions in an episode: a few dozen suffice for four parts with the person about
@@ -257,7 +257,7 @@ def _world_config(task) -> WorldConfig:
     if isinstance(task, WorldConfig):
         return task
     if isinstance(task, (str, os.PathLike)):
-        from sim.tasks import load_task
+        from sim.world.tasks import load_task
 
         path = Path(task)
         if not path.is_absolute() and not path.is_file() and (REPO_ROOT / path).is_file():

@@ -1,6 +1,6 @@
 """Pick-and-place episodes: look, decide, pick, until every part has had its pick or the robot gives up.
 
-Each round the robot looks at the cell (:class:`sim.perception.Perception`): with ``poses=
+Each round the robot looks at the cell (:class:`sim.skills.perception.Perception`): with ``poses=
 "recognized"`` it renders the Kinect and runs PSORR; with ``"oracle"`` it takes the simulator's
 true poses (and, with the human about, only checks whether someone is reaching in). Then:
 
@@ -10,7 +10,7 @@ true poses (and, with the human about, only checks whether someone is reaching i
 - otherwise pick the first remaining part, in task order, from the pose that look returned.
 
 A part is picked at most once. While the arm moves, the monitor stops it whenever someone
-reaches in (:mod:`sim.cell`). A look costs ``THINK_S`` of simulated time, during which the arm
+reaches in (:mod:`sim.control.cell`). A look costs ``THINK_S`` of simulated time, during which the arm
 holds still, so the human keeps moving while the robot thinks.
 """
 
@@ -25,10 +25,10 @@ import mujoco
 import numpy as np
 
 from psorr.errors import InvalidInputError
-from sim.cell import ArmCell, Recorder, WorkspaceBlockedError
-from sim.human import ReachingHuman
-from sim.perception import MONITOR_OCCUPIED, Estimate, Look, Perception
-from sim.pick import PickResult, fixture_error, pick_and_place, pose_error, resting_on_table
+from sim.control.cell import ArmCell, Recorder, WorkspaceBlockedError
+from sim.people.human import ReachingHuman
+from sim.skills.perception import MONITOR_OCCUPIED, Estimate, Look, Perception
+from sim.skills.pick import PickResult, fixture_error, pick_and_place, pose_error, resting_on_table
 from sim.world import World
 
 __all__ = ["Episode", "EpisodeResult", "PickResult", "fixture_error", "pick_and_place", "pose_error", "run_episode"]
@@ -73,7 +73,7 @@ class Episode:
         rng: the only randomness (the human's reaches, then the sensor noise).
         poses: ``"recognized"`` (PSORR on the Kinect's cloud) or ``"oracle"`` (true poses).
         occluder: the human reaches over the table on a seeded timeline; the robot watches for it.
-        recorder: gets every physics step and each look (see :mod:`sim.record`), or None.
+        recorder: gets every physics step and each look (see :mod:`sim.recording.recorder`), or None.
         rgb: looks also render the colour image; default: only when there is a recorder to show it.
 
     Call :meth:`close` when done (or use it as a context manager): it frees the renderers.
@@ -142,7 +142,7 @@ class Episode:
              alternatives: tuple[np.ndarray, ...] = ()) -> PickResult:
         """Pick-and-place ``part`` from the pose (4, 4, world); it leaves the remaining list whatever happens.
         With ``alternatives`` (the pose's near-symmetric twins the look could not rule out) and
-        recognition on, the robot looks at the part in its hand before placing it (:mod:`sim.in_hand`)."""
+        recognition on, the robot looks at the part in its hand before placing it (:mod:`sim.skills.in_hand`)."""
         if part not in self.remaining:
             raise InvalidInputError(f"{part!r} is not waiting to be picked; remaining: {self.remaining}")
         result = pick_and_place(self.world, part, T_world_part, self.cell, alternatives,

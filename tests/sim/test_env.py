@@ -13,7 +13,7 @@ import sim
 from psorr.errors import InvalidInputError
 from sim.env import DEFAULT_MAX_STEPS, REFUSED_REWARD, WAIT_REWARD, PickPlaceEnv
 from sim.episode import Episode
-from sim.perception import MONITOR_OCCUPIED, Estimate, Look
+from sim.skills.perception import MONITOR_OCCUPIED, Estimate, Look
 from sim.world import WorldConfig
 
 PARTS = ("u_channel", "chassis")

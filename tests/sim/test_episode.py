@@ -70,7 +70,7 @@ def test_same_seed_gives_the_same_picks(oracle):
 
 def test_recognized_episode_picks_only_recognised_poses(monkeypatch):
     """Every grasp is planned on a pose the latest look returned (a grasp on any other pose is a bug)."""
-    from sim.perception import Perception
+    from sim.skills.perception import Perception
 
     looks, picked = [], []
     real_look, real_pick = Perception.look, episode.pick_and_place
@@ -105,59 +105,3 @@ def test_recognized_episode_picks_only_recognised_poses(monkeypatch):
 def test_run_episode_rejects_an_unknown_mode():
     with pytest.raises(InvalidInputError, match="oracle"):
         run_episode(world_for(), np.random.default_rng(0), poses="guess")
-
-
-def test_a_wrong_estimate_is_reported_and_not_placed():
-    """An estimate 30 mm off across the channel: the error is reported and the truth, not the plan,
-    decides placement (the part cannot end up seated)."""
-    world = world_for()
-    world.reset()
-    T = world.body_pose("u_channel").copy()
-    T[:3, 3] += T[:3, :3] @ [0.0, 0.03, 0.0]
-    pick = episode.pick_and_place(world, "u_channel", T)
-    assert pick.pose_error_mm == pytest.approx(30.0, abs=1e-6)
-    assert not pick.placed
-    T_part = world.body_pose("u_channel")
-    assert not (np.linalg.norm(T_part[:3, 3] - world.T_world_fixtures["u_channel"][:3, 3]) < 0.005
-                and abs(T_part[2, 3] - world.table_top) < 0.003)
-
-
-def test_pick_and_place_rejects_an_unknown_part():
-    world = world_for()
-    with pytest.raises(InvalidInputError, match="unknown part"):
-        episode.pick_and_place(world, "bushing", np.eye(4))
-
-
-def test_a_flipped_but_symmetric_estimate_is_planned_upright():
-    from psorr.synthetic.catalog import load_catalog
-    from sim.grasp_planning import upright_equivalent
-
-    info = load_catalog()["transformer"]
-    flip = next(S for S in info.symmetries if S[2, 2] < -0.5)  # 180 deg about a horizontal axis
-    T_true = np.eye(4)
-    T_true[:3, 3] = (0.3, 0.1, 0.75)
-    upright = upright_equivalent(T_true @ flip, info)
-    assert np.allclose(upright, T_true, atol=1e-9)
-
-
-def test_plans_refuse_a_wound_up_arm_and_an_arm_in_the_table():
-    """The local IK can land on a configuration with the upper arm swung down behind the base: its tool
-    pose is right, but the arm could only get there through the table."""
-    from sim.cell import ArmCell
-    from sim.grasp_planning import configuration_problem
-
-    world = world_for()
-    cell = ArmCell(world)
-    home = world.data.qpos.copy()
-    assert configuration_problem(cell, home) == ""
-    wound = home.copy()
-    wound[cell.qadr[1]] = -3.87
-    assert "wound-up" in configuration_problem(cell, wound)
-    into_table = home.copy()
-    into_table[cell.qadr[1]] = -0.2  # the upper arm nearly level: the forearm hangs through the table
-    into_table[cell.qadr[2]] = 1.0
-    assert "under the table" in configuration_problem(cell, into_table)
-    elbow_on_table = home.copy()
-    elbow_on_table[cell.qadr[1]] = -0.1  # the upper arm level, the forearm folded back up: the elbow is in the top
-    elbow_on_table[cell.qadr[2]] = 2.8
-    assert "touch table" in configuration_problem(cell, elbow_on_table)

@@ -1,0 +1,203 @@
+"""Grasp planning: which catalog grasp, approached how, reaching which tool poses.
+
+:func:`plan_grasp` takes a part's pose estimate and returns the first grasp (catalog order) that
+is narrower than the gripper, not a thin-wall pinch, approached from above, and whose pre-grasp,
+grasp, above-fixture and place poses the IK reaches; grasps whose pads fit inside the fixture's
+pocket come first, the others are released above the pocket's walls. Nothing here reads the
+simulator's truth: only the estimate, the catalog and the robot's own kinematics.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from psorr.synthetic.catalog import Grasp
+from sim.control.cell import ArmCell
+from sim.control.ik import UnreachableTargetError
+
+PRE_GRASP = 0.10  # m back along -approach before the approach
+LIFT = 0.10  # m the tool rises after closing; the transport runs at that height
+PAD_CLEARANCE = 0.0015  # m kept between the pads' lower ends and the table when grasping
+WALL_CLEARANCE = 0.002  # m between the pads' lower ends and the fixture walls' tops at release
+
+
+def angle_deg(R: np.ndarray) -> float:
+    """Rotation angle (degrees) of a (3, 3) rotation matrix."""
+    return float(np.degrees(np.arccos(np.clip((np.trace(R) - 1.0) / 2.0, -1.0, 1.0))))
+
+
+def tool_pose(T_world_part: np.ndarray, grasp, flip: bool) -> np.ndarray:
+    """Tool pose (z along the approach, x along closing, optionally both flipped about z) for ``grasp``."""
+    z = T_world_part[:3, :3] @ grasp.approach
+    x = T_world_part[:3, :3] @ grasp.closing * (-1.0 if flip else 1.0)
+    T = np.eye(4)
+    T[:3, :3] = np.column_stack([x, np.cross(z, x), z])
+    T[:3, 3] = T_world_part[:3, :3] @ grasp.point + T_world_part[:3, 3]
+    return T
+
+
+def shift(T: np.ndarray, offset) -> np.ndarray:
+    T = T.copy()
+    T[:3, 3] = T[:3, 3] + offset
+    return T
+
+
+@dataclass(frozen=True)
+class GraspPlan:
+    """A reachable grasp: the tool poses (4, 4, world) at grasp and place, and the joints (nq,) on the way."""
+
+    grasp: Grasp
+    T_grasp: np.ndarray
+    T_place: np.ndarray
+    q_pre: np.ndarray
+    q_grasp: np.ndarray
+    q_place_above: np.ndarray
+    pads_clear_fixture: bool  # the pads fit inside the pocket when the part is seated
+
+
+def pads_clear_fixture(cell: ArmCell, info, T_fix_tool: np.ndarray, width: float) -> bool:
+    """Whether both pads, closed to ``width`` around the seated part, stay inside the fixture's pocket
+    (or above its walls); ``T_fix_tool`` is the tool pose in the fixture frame."""
+    cfg = cell.world.config
+    hx, hy, hz = (float(v) for v in cell.model.geom_size[cell.pads[0]])
+    lo = info.bounds()[0, :2] - cfg.fixture_clearance
+    hi = info.bounds()[1, :2] + cfg.fixture_clearance
+    for side in (-1.0, 1.0):
+        cx = side * (width / 2 + hx)
+        corners = np.array([[cx + a * hx, b * hy, c * hz, 1.0] for a in (-1, 1) for b in (-1, 1) for c in (-1, 1)])
+        pts = corners @ T_fix_tool.T
+        low = pts[:, 2] < cfg.fixture_wall[1] + WALL_CLEARANCE
+        if np.any(low & np.any((pts[:, :2] < lo) | (pts[:, :2] > hi), axis=1)):
+            return False
+    return True
+
+
+def plan_grasp(cell: ArmCell, part: str, T_est: np.ndarray) -> tuple[GraspPlan | None, str]:
+    """The first reachable grasp, in catalog order, preferring those whose pads fit the fixture's pocket."""
+    world = cell.world
+    info = world.catalog[part]
+    T_fix = world.T_world_fixtures[part]
+    # Plan from home whatever the arm's pose: from the look pose, panned aside, the local IK can
+    # wander into a wound-up configuration the arm cannot get to.
+    q0 = cell.data.qpos.copy()
+    q0[cell.qadr] = cell.model.key(cell.cfg.home_key).qpos[cell.qadr]
+    reasons, candidates = [], []
+    for index, grasp in enumerate(info.grasps):
+        if grasp.width >= world.arm.max_opening:
+            reasons.append(f"{grasp.name}: {grasp.width * 1e3:.0f} mm too wide")
+            continue
+        if grasp.width < 0.008:
+            # A pinch on a thin wall: the pads' own width would straddle the wall's neighbours.
+            reasons.append(f"{grasp.name}: pinch of {grasp.width * 1e3:.1f} mm not attempted")
+            continue
+        approach_w = T_est[:3, :3] @ grasp.approach
+        if approach_w[2] > -0.7:  # only roughly top-down approaches: the table is in the way otherwise
+            reasons.append(f"{grasp.name}: approach not from above")
+            continue
+        for flip in (False, True):
+            T_grasp = tool_pose(T_est, grasp, flip)
+            # Keep the pads' lower ends off the table: grasp higher on the same faces if need be.
+            short = world.table_top + PAD_CLEARANCE - (T_grasp[2, 3] - cell.pad_reach)
+            if short > 0:
+                if grasp.point[2] + short > info.bounds()[1, 2] - 0.002:
+                    reasons.append(f"{grasp.name}: the pads would hit the table")
+                    break
+                T_grasp = shift(T_grasp, [0, 0, short])
+            T_part_tool = np.linalg.inv(T_est) @ T_grasp
+            for T_place, clears, turn in place_poses(cell, info, T_fix, T_part_tool, grasp.width, T_grasp):
+                candidates.append(((not clears, index, turn), grasp, flip, T_grasp, T_place, clears))
+    candidates.sort(key=lambda c: c[0])
+    for _, grasp, flip, T_grasp, T_place, clears in candidates:
+        try:
+            q_pre = cell.solve(q0, shift(T_grasp, PRE_GRASP * -T_grasp[:3, 2]))
+            q_grasp = cell.solve(q_pre, T_grasp)
+            T_above = shift(T_place, [0, 0, T_grasp[2, 3] + LIFT - T_place[2, 3]])
+            q_above = cell.solve(q_grasp, T_above)
+            q_place = cell.solve(q_above, T_place)
+        except UnreachableTargetError as exc:
+            reasons.append(f"{grasp.name}{' flipped' if flip else ''}: {exc}")
+            continue
+        problem = next(filter(None, (configuration_problem(cell, q) for q in (q_pre, q_grasp, q_above, q_place))), "")
+        if problem:
+            reasons.append(f"{grasp.name}{' flipped' if flip else ''}: {problem}")
+            continue
+        return GraspPlan(grasp, T_grasp, T_place, q_pre, q_grasp, q_above, clears), ""
+    return None, "; ".join(reasons) or "the part has no grasps"
+
+
+def place_poses(cell: ArmCell, info, T_fix: np.ndarray, T_part_tool: np.ndarray, width: float,
+                T_grasp: np.ndarray) -> list[tuple[np.ndarray, bool, float]]:
+    """The tool poses (4, 4, world) that seat a part held at ``T_part_tool`` (the tool in the part's frame)
+    in its fixture ``T_fix``, one per symmetry of the part whose tool approach points down; each with
+    whether the pads clear the fixture's walls, and the wrist's turn (deg) from ``T_grasp``."""
+    out = []
+    for S in info.symmetries:
+        T_place = T_fix @ S @ T_part_tool
+        if T_place[2, 2] > -0.7:
+            continue
+        clears = pads_clear_fixture(cell, info, S @ T_part_tool, width)
+        out.append((T_place, clears, angle_deg(T_grasp[:3, :3].T @ T_place[:3, :3])))  # prefer the wrist turning least
+    return out
+
+
+def replan_place(cell: ArmCell, part: str, grasp: Grasp, T_part_tool: np.ndarray, q_start: np.ndarray,
+                 T_grasp: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool] | None:
+    """For a part found, once in the hand, to be held at ``T_part_tool`` rather than as planned: the
+    place pose (4, 4), the joints (nq,) above it at the transport height (from ``q_start``), and whether
+    the pads clear the fixture; None if no seat is reachable."""
+    world = cell.world
+    info = world.catalog[part]
+    options = place_poses(cell, info, world.T_world_fixtures[part], T_part_tool, grasp.width, T_grasp)
+    for T_place, clears, _ in sorted(options, key=lambda o: (not o[1], o[2])):
+        try:
+            T_above = shift(T_place, [0, 0, T_grasp[2, 3] + LIFT - T_place[2, 3]])
+            q_above = cell.solve(q_start, T_above)
+            q_place = cell.solve(q_above, T_place)
+        except UnreachableTargetError:
+            continue
+        if not (configuration_problem(cell, q_above) or configuration_problem(cell, q_place)):
+            return T_place, q_above, clears
+    return None
+
+
+def configuration_problem(cell: ArmCell, q: np.ndarray) -> str:
+    """Why the arm should not go to ``q`` (nq,), or "" if it may.
+
+    The IK is local: from some starts it converges to a wound-up configuration (the upper arm
+    swung down behind the base) whose tool pose is right but which the arm can only reach by
+    sweeping through the table. Such solutions, and any whose links (pads and fingers aside,
+    which belong near the part) touch the table, a part or a fixture, are refused.
+    """
+    lift = float(q[cell.qadr[1]])
+    if not -math.pi <= lift <= 0.0:
+        return f"wound-up arm (shoulder lift {math.degrees(lift):.0f} deg, outside [-180, 0])"
+    model = cell.model
+    data = cell.world.kinematics(q)
+    tool_z = float(data.site_xpos[model.site(cell.cfg.tool_site).id][2])
+    if tool_z < cell.world.table_top:  # a link through the table can escape the contact test below
+        return f"the tool would be {1e3 * (cell.world.table_top - tool_z):.0f} mm under the table top"
+    mujoco.mj_collision(model, data)
+    links = {model.geom(g).id for g in cell.cfg.collision_geoms} - set(cell.pads) - cell.finger_geoms
+    for contact in data.contact[: data.ncon]:
+        pair = {contact.geom1, contact.geom2}
+        if pair & links and not pair <= links and contact.dist < 0:
+            other = (pair - links).pop()
+            return f"the arm would touch {model.geom(other).name or model.body(model.geom_bodyid[other]).name}"
+    return ""
+
+
+def upright_equivalent(T_est: np.ndarray, info) -> np.ndarray:
+    """The estimate re-expressed by the part's symmetry whose +z points most nearly up.
+
+    A recogniser may return any of a symmetric part's equivalent poses (a
+    transformer flipped 180 deg about its centre is the same transformer);
+    planning needs the one that stands on its resting face.
+    """
+    candidates = [T_est @ S for S in info.symmetries]
+    return max(candidates, key=lambda T: (round(float(T[2, 2]), 6), -float(T[2, 3])))
+
+

@@ -1,0 +1,234 @@
+"""What the robot knows about the cell: the Kinect's frames, PSORR's detections, and whether someone is reaching in.
+
+The robot sees through the camera and knows its own body, nothing else. "Someone is reaching
+over the table" is decided from the depth image alone: points above the table's footprint
+higher than any resting workpiece stands (plus a margin) are something that does not belong
+there. Two things are filtered out first, both from the robot's knowledge of itself: its own
+arm (the pixels where its model, rendered at the known joint angles, lies; that is what the
+segmentation render's arm pixels are) and, while it holds one, the part in its hand (a ball
+around the tool of the part's size). PSORR is also spared the fixtures' pixels: the robot knows
+where the fixtures stand, since it places parts into them, and to the recognizer their walls are
+part-sized things on the table that no model explains, each costing a finer second look.
+
+The same test serves the look before a pick (the full Kinect frame) and the protective-stop
+monitor while the arm moves (a 160x120 depth render every 0.25 s; see :mod:`sim.control.cell`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from types import MappingProxyType
+from typing import NamedTuple
+
+import mujoco
+import numpy as np
+
+from psorr.errors import InvalidInputError
+from psorr.sensing.camera import CameraIntrinsics
+from psorr.sensing.kinect_noise import KINECT_V1
+from psorr.types import Detection, PointCloud
+from sim.control.ik import T_world_site
+from sim.devices.sensor import DepthCamera, SensorFrame, T_world_camera_opencv, depth_and_bodies
+from sim.world import World
+
+CEILING_MARGIN = 0.03  # m above the tallest resting part before a point counts as an intrusion
+INTRUSION_FRACTION = 0.001  # of the image's pixels: fewer intruding points than this are noise
+WORKSPACE_BELOW = 0.03  # m below the table top the workspace crop starts (the table's own points stay in)
+MONITOR_CAMERA = CameraIntrinsics(width=160, height=120, fx=131.25, fy=131.25, cx=79.5, cy=59.5)
+MONITOR_OCCUPIED = INTRUSION_FRACTION * MONITOR_CAMERA.width * MONITOR_CAMERA.height  # intruding points
+"""The monitor's depth stream: the Kinect's field of view at a quarter of its resolution."""
+
+
+class Estimate(NamedTuple):
+    """One detection of a part, in the world frame.
+
+    Attributes:
+        T_world_part: (4, 4) the part's pose.
+        score: the detection's score, in [0, 1].
+        alternatives: its near-symmetric twins (4, 4, world) that the look could not rule out
+            (:attr:`psorr.types.Detection.alternatives`).
+    """
+
+    T_world_part: np.ndarray
+    score: float
+    alternatives: tuple = ()
+
+
+@dataclass(frozen=True, eq=False)
+class Look:
+    """One look at the cell before a pick.
+
+    Attributes:
+        frame: the Kinect frame (None when the look was an oracle's occupancy check only).
+        detections: PSORR's detections in the camera frame (empty for the oracle).
+        estimates: per part, its detections as :class:`Estimate` s, best score first.
+        intruding: how many points are above the workspace that neither a part nor the robot explains.
+        occupied: ``intruding`` reaches the threshold: someone is reaching in.
+    """
+
+    frame: SensorFrame | None
+    detections: tuple[Detection, ...]
+    estimates: MappingProxyType
+    intruding: int
+    occupied: bool
+
+
+class Perception:
+    """The robot's senses in ``world``: a Kinect for looks, a low-resolution depth monitor, PSORR.
+
+    Args:
+        world: the cell.
+        rng: the sensor noise's randomness (the monitor draws its own from it).
+        recognize: run PSORR on each look (False: looks only check occupancy).
+        rgb: render the colour image with each look (for a recorder or a viewer; PSORR needs depth only).
+
+    Call :meth:`close` (or use it as a context manager) to free the renderers.
+    """
+
+    def __init__(self, world: World, rng: np.random.Generator, recognize: bool = True, rgb: bool = True):
+        self.world, self.rng, self.rgb = world, rng, rgb
+        self.camera = DepthCamera(world.model, world.camera_name)
+        self._monitor = mujoco.Renderer(world.model, MONITOR_CAMERA.height, MONITOR_CAMERA.width)
+        self._recognizer = _recognizer(world) if recognize else None
+        model = world.model
+        base = model.body(world.arm.base_body).id
+        self._arm_bodies = np.array([b for b in range(model.nbody) if _descends(model, b, base)])
+        self._fixture_bodies = np.array([model.body(f"{name}_fixture").id for name in world.T_world_fixtures],
+                                        dtype=np.int64)
+        heights = [world.catalog[p].bounds()[1, 2] for p in world.workpieces]
+        self.ceiling = world.table_top + max(heights) + CEILING_MARGIN
+        self._monitor_rays = MONITOR_CAMERA.pixel_rays().reshape(-1, 3)
+
+    @property
+    def library(self):
+        """The recognizer's :class:`psorr.library.models.ModelLibrary`, or None when not recognising."""
+        return self._recognizer.library if self._recognizer is not None else None
+
+    # -------------------------------------------------------------------------------- looking
+
+    def look(self, data: mujoco.MjData, holding: str | None = None) -> Look:
+        """Render the Kinect, count intruding points and (when nobody intrudes and recognising) run PSORR.
+
+        PSORR gets the cloud cropped to the workspace: the table's footprint from just below its
+        top up to the ceiling, less the robot's own pixels and the fixtures'. Cropped points become
+        NaN, so the cloud stays organised.
+        """
+        frame = self.camera.render(data, self.rng, KINECT_V1, rgb=self.rgb)
+        T = frame.T_world_camera
+        world_pts, valid = self._world_points(frame)
+        intruding = self._count_intruding(world_pts[valid], data, holding)
+        occupied = intruding >= INTRUSION_FRACTION * len(world_pts)
+        detections, estimates = (), {}
+        if self._recognizer is not None and not occupied:
+            cloud = self._workspace_cloud(frame, world_pts, valid, self.ceiling)
+            detections = tuple(self._recognizer.recognize(cloud, self.rng).detections)
+            for det in detections:
+                if det.model in self.world.workpieces:
+                    estimates.setdefault(det.model, []).append(
+                        Estimate(T @ det.T_cloud_model, det.score, tuple(T @ A for A in det.alternatives)))
+        estimates = {k: tuple(sorted(v, key=lambda e: -e.score)) for k, v in estimates.items()}
+        return Look(frame, detections, MappingProxyType(estimates), intruding, bool(occupied))
+
+    def look_at_held(self, data: mujoco.MjData, part: str, T_world_part: np.ndarray) -> tuple[Detection, np.ndarray]:
+        """Render the Kinect and refine the pose (4, 4, world) of ``part``, held up in the hand, from
+        ``T_world_part`` (PSORR's :meth:`~psorr.recognize.Recognizer.refine`). The cloud is the look's
+        crop without its ceiling (the part is above it) and without the arm's pixels (the fingers'
+        included). Returns the detection (camera frame) and ``T_world_camera`` (4, 4)."""
+        if self._recognizer is None:
+            raise InvalidInputError("look_at_held needs a Perception built with recognize=True")
+        frame = self.camera.render(data, self.rng, KINECT_V1, rgb=False)
+        T = frame.T_world_camera
+        cloud = self._workspace_cloud(frame, *self._world_points(frame))
+        return self._recognizer.refine(cloud, part, np.linalg.inv(T) @ T_world_part), T
+
+    def _world_points(self, frame: SensorFrame) -> tuple[np.ndarray, np.ndarray]:
+        """The frame's points in the world frame (N, 3; NaN rows stay NaN), and which are measured and
+        not the robot's own arm (N,)."""
+        T = frame.T_world_camera
+        pts = frame.cloud.points
+        own = np.isin(frame.segmentation.ravel(), self._arm_bodies)
+        return pts @ T[:3, :3].T + T[:3, 3], np.isfinite(pts[:, 2]) & ~own
+
+    def _workspace_cloud(self, frame: SensorFrame, world_pts: np.ndarray, valid: np.ndarray,
+                         ceiling: float = np.inf) -> PointCloud:
+        """PSORR's cloud: the ``valid`` points in the workspace up to ``ceiling`` (world z, m), less the
+        fixtures'. Cropped points become NaN, so the cloud stays organised."""
+        with np.errstate(invalid="ignore"):
+            keep = (valid & self._in_workspace(world_pts) & (world_pts[:, 2] <= ceiling)
+                    & ~np.isin(frame.segmentation.ravel(), self._fixture_bodies))
+        return _masked(frame.cloud, keep)
+
+    def _in_workspace(self, world_pts: np.ndarray) -> np.ndarray:
+        hx, hy = (v / 2 for v in self.world.config.table_size)
+        return ((np.abs(world_pts[:, 0]) < hx) & (np.abs(world_pts[:, 1]) < hy)
+                & (world_pts[:, 2] > self.world.table_top - WORKSPACE_BELOW))
+
+    def occupied(self, data: mujoco.MjData, holding: str | None = None) -> bool:
+        """The monitor's verdict: is someone reaching over the table now? (See :meth:`monitor_intruding`.)"""
+        return self.monitor_intruding(data, holding) >= MONITOR_OCCUPIED
+
+    def monitor_intruding(self, data: mujoco.MjData, holding: str | None = None) -> int:
+        """How many points of the monitor's image are above the workspace, neither a part nor the robot.
+
+        It reads a 160x120 depth image with the Kinect's depth noise (its standard deviation at each
+        depth, as the full-resolution model gives it). The model's pixel-scale effects (lateral
+        jitter, edge dropouts, the shadow band) are below a pixel at this resolution and are left out:
+        the full model costs more than the render, and the monitor runs four times a second.
+        """
+        self._monitor.update_scene(data, camera=self.world.camera_name)
+        depth, body = depth_and_bodies(self._monitor, self.world.model)
+        depth = np.where(np.isin(body, self._arm_bodies), 0.0, depth).ravel()
+        keep = depth > 0
+        # depth_sigma's disparity step is the full-resolution sensor's, which the monitor's image is binned from.
+        depth[keep] += self.rng.normal(size=int(keep.sum())) * KINECT_V1.depth_sigma(depth[keep])
+        T = T_world_camera_opencv(self.world.model, data, self.world.camera_name)
+        pts = (self._monitor_rays[keep] * depth[keep, None]) @ T[:3, :3].T + T[:3, 3]
+        return self._count_intruding(pts, data, holding)
+
+    def _count_intruding(self, world_pts: np.ndarray, data: mujoco.MjData, holding: str | None) -> int:
+        inside = self._in_workspace(world_pts) & (world_pts[:, 2] > self.ceiling)
+        if holding is not None and np.any(inside):
+            tool = T_world_site(self.world.model, data, self.world.arm.tool_site)[:3, 3]
+            radius = float(np.linalg.norm(np.ptp(self.world.catalog[holding].bounds(), axis=0))) + 0.02
+            inside &= np.linalg.norm(world_pts - tool, axis=1) > radius
+        return int(np.count_nonzero(inside))
+
+    def close(self) -> None:
+        self.camera.close()
+        self._monitor.close()
+
+    def __enter__(self) -> Perception:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def _masked(cloud: PointCloud, keep: np.ndarray) -> PointCloud:
+    """``cloud`` with the points outside ``keep`` set to NaN (and label -1), still organised."""
+    points = np.where(keep[:, None], cloud.points, np.nan)
+    labels = None if cloud.labels is None else np.where(keep, cloud.labels, -1)
+    return PointCloud(points, colors=cloud.colors, normals=None, labels=labels, width=cloud.width,
+                      height=cloud.height)
+
+
+def _descends(model: mujoco.MjModel, body: int, root: int) -> bool:
+    while body > 0:
+        if body == root:
+            return True
+        body = int(model.body_parentid[body])
+    return False
+
+
+_RECOGNIZERS: dict[tuple, object] = {}
+
+
+def _recognizer(world: World):
+    """A PSORR recognizer for every catalog part (trained once per process; cached on disk by psorr)."""
+    from psorr.library.models import ModelLibrary
+    from psorr.recognize import Recognizer
+
+    paths = tuple(str(world.catalog[n].mesh_path) for n in sorted(world.catalog))
+    if paths not in _RECOGNIZERS:
+        _RECOGNIZERS[paths] = Recognizer(ModelLibrary.from_meshes(list(paths)))
+    return _RECOGNIZERS[paths]

@@ -1,0 +1,66 @@
+"""What a robot cell is built from: :class:`WorldConfig`, the parameter object of
+:func:`sim.world.build_world` (which assembles the scene; this module only describes it)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from psorr.errors import InvalidInputError
+from psorr.sensing.camera import CameraIntrinsics
+from sim.devices.sensor import KINECT_V1_CAMERA, check_intrinsics
+
+
+@dataclass(frozen=True)
+class WorldConfig:
+    """What to build (metres, degrees, seconds).
+
+    Attributes:
+        workpieces: catalog part names to place, each once (``psorr.synthetic.catalog.load_catalog()``).
+        table_size: (x, y) of the table top; the arm stands at the -x edge.
+        table_height: height of the table top above the floor.
+        arm_inset: distance of the arm's base axis from the table's -x edge.
+        camera_height: camera height above the table top, in [0.6, 1.0].
+        camera_tilt_deg: angle of the optical axis from straight down, in [0, 45]; the camera
+            stands on the +x side and leans towards the arm.
+        camera_target: (x, y) of the table-top point on the optical axis.
+        fixtures: add one fixture per workpiece.
+        fixture_clearance: gap between a part's footprint and its fixture's walls, per side.
+        fixture_wall: (thickness, height) of the fixture walls.
+        reach: (min, max) horizontal distance from the arm's base axis to anything placed.
+        gap: least distance between placed footprints.
+        drop_height: height above the table the parts are released from.
+        settle_time: simulated time the parts are left to settle before the home keyframe.
+        intrinsics: the camera; MuJoCo needs fx == fy and a centred principal point.
+        occluder: add the human arm (``sim/people/occluder.py``) and draw its reach schedule.
+    """
+
+    workpieces: tuple[str, ...] = ("u_channel", "chassis", "transformer", "flanged_hub")
+    table_size: tuple[float, float] = (0.9, 1.0)
+    table_height: float = 0.75
+    arm_inset: float = 0.1
+    camera_height: float = 0.8
+    camera_tilt_deg: float = 30.0
+    camera_target: tuple[float, float] = (0.0, 0.0)
+    fixtures: bool = True
+    fixture_clearance: float = 0.004
+    fixture_wall: tuple[float, float] = (0.006, 0.012)
+    reach: tuple[float, float] = (0.25, 0.7)
+    gap: float = 0.02
+    drop_height: float = 0.003
+    settle_time: float = 0.5
+    intrinsics: CameraIntrinsics = KINECT_V1_CAMERA
+    occluder: bool = True
+
+    def __post_init__(self):
+        object.__setattr__(self, "workpieces", tuple(self.workpieces))
+        if not self.workpieces or len(set(self.workpieces)) != len(self.workpieces):
+            raise InvalidInputError(f"workpieces must name at least one part, each once; got {self.workpieces}")
+        if not 0.6 <= self.camera_height <= 1.0:
+            raise InvalidInputError(f"camera_height must lie in [0.6, 1.0] m, got {self.camera_height}")
+        if not 0.0 <= self.camera_tilt_deg <= 45.0:
+            raise InvalidInputError(f"camera_tilt_deg must lie in [0, 45], got {self.camera_tilt_deg}")
+        if min(*self.table_size, self.table_height, *self.fixture_wall, self.fixture_clearance) <= 0:
+            raise InvalidInputError("table_size, table_height, fixture_wall and fixture_clearance must be > 0")
+        if not 0 <= self.reach[0] < self.reach[1] or min(self.gap, self.drop_height, self.settle_time) < 0:
+            raise InvalidInputError("reach must be (min, max) with 0 <= min < max; gap, drop_height, settle_time >= 0")
+        check_intrinsics(self.intrinsics)
