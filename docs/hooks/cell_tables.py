@@ -1,0 +1,65 @@
+"""The robot cell's benchmark tables (grasp tolerance, episodes), each from its ``benchmarks/results/*.json``."""
+
+from __future__ import annotations
+
+from tables_common import frac, load, table
+
+# ---- grasp tolerance (benchmarks/grasp_tolerance.py) -----------------------------------------------------------
+
+SWEEP_UNITS = {"translation": "mm", "yaw": "deg", "tilt": "deg"}
+
+
+def grasp_tolerance() -> str:
+    data = load("grasp_tolerance")
+    trials, rows = data["trials"], []
+    for sweep, unit in SWEEP_UNITS.items():
+        parts = {t["part"] for t in trials if t["sweep"] == sweep}
+        for level in data["grid"][sweep]:
+            at = [t for t in trials if t["level"] == level and t["part"] in parts
+                  and (t["sweep"] == sweep or (level == 0 and t["sweep"] == "zero"))]
+            side = {s: [t for t in at if t.get("vs_closing") == s] for s in ("along", "across")}
+            split = [frac(sum(t["placed"] for t in side[s]), len(side[s])) if side[s] else "-" for s in side]
+            rows.append([sweep, f"{level} {unit}", len(at), frac(sum(t["grasped"] for t in at), len(at)),
+                         frac(sum(t["placed"] for t in at), len(at)), *split])
+    return table(["sweep", "error", "picks", "grasped", "placed", "placed, error along closing",
+                  "placed, across closing"], rows, "lrrrrrr")
+
+
+# ---- episodes (benchmarks/episodes.py) -------------------------------------------------------------------------
+
+def episodes() -> str:
+    rows = []
+    for r in load("episodes")["rows"]:
+        error = "0" if r["mode"] == "oracle" else \
+            f"{r['pose_error_mm_median']:.1f} mm, {r['rot_error_deg_median']:.1f} deg"
+        rows.append([r["mode"], r["episodes"], r["picks"], f"{r['grasp_success_rate']:.0%}",
+                     f"{r['place_success_rate']:.0%}", error,
+                     f"{r['wall_s_per_episode']:.1f} / {r['wall_s_median']:.1f} / {r['wall_s_max']:.1f}",
+                     f"{r['looks_per_episode']:.1f}", r["occupied_looks"], r["protective_stops"],
+                     f"{r['min_human_clearance_mm']:.0f} mm"])
+    return table(["poses", "episodes", "picks", "grasped", "placed", "pose error (median)",
+                  "wall s per episode (mean / median / max)", "looks per episode", "waits for the person",
+                  "protective stops", "closest the arm came to the person"], rows, "lrrrrrrrrrr")
+
+
+def episodes_per_part() -> str:
+    per_part = load("episodes")["per_part"]
+    parts = sorted({p for counts in per_part.values() for p in counts})
+    rows = []
+    for part in parts:
+        row = [part]
+        for mode in per_part:
+            picks, grasped, placed = per_part[mode][part]
+            row += [f"{grasped}/{picks}", f"{placed}/{picks}"]
+        rows.append(row)
+    header = ["part"] + [f"{mode} {what}" for mode in per_part for what in ("grasped", "placed")]
+    return table(header, rows, "l" + "r" * (len(header) - 1))
+
+
+def episodes_in_hand() -> str:
+    looks = [p for p in load("episodes")["picks"].get("recognized", []) if p.get("in_hand")]
+    rows = [[p["episode"], p["part"], f"{p['in_hand']['yaw_deg']:.0f}", p["in_hand"]["telling_pixels"],
+             f"{p['in_hand']['score']:.2f}", "settled" if p["in_hand"]["settled"] else "undecided (estimate kept)",
+             "yes" if p["in_hand"]["chosen"] else "no", "yes" if p["placed"] else "no"] for p in looks]
+    return table(["episode", "part", "wrist yaw deg", "telling pixels", "score", "look", "held the other way round",
+                  "placed"], rows, "rlrrrlll")
