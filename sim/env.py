@@ -45,11 +45,10 @@ import mujoco
 import numpy as np
 from gymnasium import spaces
 
-from psorr.errors import InvalidInputError, PsorrError
 from psorr.sensing.kinect_noise import KINECT_V1
-from sim.control.cell import WorkspaceBlockedError
 from sim.devices.render_backend import ensure_headless_gl
 from sim.episode import MAX_EPISODE_S, MIN_SCORE, POSE_MODES, Episode
+from sim.errors import ResetNeededError, SimInputError, WorkspaceBlockedError
 from sim.skills.grasp_planning import upright_equivalent
 from sim.skills.perception import Estimate, Look
 from sim.skills.pick import REST_TOL, PickResult
@@ -60,10 +59,6 @@ DEFAULT_TASK = "tasks/demo.yaml"
 GRASP_REWARD, PLACE_REWARD, WAIT_REWARD, REFUSED_REWARD = 1.0, 1.0, -0.01, -0.1
 DEFAULT_MAX_STEPS = 100  # actions in an episode: a few dozen suffice for four parts with the person about
 EDGE_MARGIN = 0.1  # m: a symmetric part's upright pose may stand past the table edge by up to its height
-
-
-class ResetNeededError(PsorrError):
-    """The env was stepped or rendered before :meth:`PickPlaceEnv.reset`."""
 
 
 class PickPlaceEnv(gym.Env):
@@ -90,12 +85,12 @@ class PickPlaceEnv(gym.Env):
     def __init__(self, task: str | os.PathLike | WorldConfig = DEFAULT_TASK, poses: str = "recognized",
                  occluder: bool = True, render_mode: str | None = None, max_steps: int | None = DEFAULT_MAX_STEPS):
         if poses not in POSE_MODES:
-            raise InvalidInputError(f"poses must be one of {POSE_MODES}, got {poses!r}")
+            raise SimInputError(f"poses must be one of {POSE_MODES}, got {poses!r}")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise InvalidInputError(f"render_mode must be None or one of {self.metadata['render_modes']}, "
+            raise SimInputError(f"render_mode must be None or one of {self.metadata['render_modes']}, "
                                     f"got {render_mode!r}")
         if max_steps is not None and (isinstance(max_steps, bool) or not isinstance(max_steps, int) or max_steps < 1):
-            raise InvalidInputError(f"max_steps must be a positive int or None, got {max_steps!r}")
+            raise SimInputError(f"max_steps must be a positive int or None, got {max_steps!r}")
         self.config = replace(_world_config(task), occluder=bool(occluder))
         self.poses, self.occluder, self.render_mode, self.max_steps = poses, bool(occluder), render_mode, max_steps
         self.parts = self.config.workpieces
@@ -138,7 +133,7 @@ class PickPlaceEnv(gym.Env):
         if self.episode is None:
             raise ResetNeededError("call reset() before step()")
         if not self.action_space.contains(action):
-            raise InvalidInputError(f"action must be an int in [0, {len(self.parts)}]: a part's index in "
+            raise SimInputError(f"action must be an int in [0, {len(self.parts)}]: a part's index in "
                                     f"{list(self.parts)}, or {len(self.parts)} to wait; got {action!r}")
         action, episode = int(action), self.episode
         self._steps += 1
@@ -263,5 +258,5 @@ def _world_config(task) -> WorldConfig:
         if not path.is_absolute() and not path.is_file() and (REPO_ROOT / path).is_file():
             path = REPO_ROOT / path
         return load_task(path).world
-    raise InvalidInputError(f"task must be a task file path (e.g. {DEFAULT_TASK!r}) or a sim.world.WorldConfig, "
+    raise SimInputError(f"task must be a task file path (e.g. {DEFAULT_TASK!r}) or a sim.world.WorldConfig, "
                             f"got {type(task).__name__}")

@@ -24,8 +24,8 @@ from types import MappingProxyType
 import mujoco
 import numpy as np
 
-from psorr.errors import InvalidInputError
-from sim.control.cell import ArmCell, Recorder, WorkspaceBlockedError
+from sim.control.cell import ArmCell, Recorder
+from sim.errors import SimInputError, WorkspaceBlockedError
 from sim.people.human import ReachingHuman
 from sim.skills.perception import MONITOR_OCCUPIED, Estimate, Look, Perception
 from sim.skills.pick import PickResult, fixture_error, pick_and_place, pose_error, resting_on_table
@@ -82,9 +82,9 @@ class Episode:
     def __init__(self, world: World, rng: np.random.Generator, poses: str = "recognized", occluder: bool = False,
                  recorder: Recorder | None = None, rgb: bool | None = None):
         if poses not in POSE_MODES:
-            raise InvalidInputError(f"poses must be one of {POSE_MODES}, got {poses!r}")
+            raise SimInputError(f"poses must be one of {POSE_MODES}, got {poses!r}")
         if occluder and not world.occluder_geoms:
-            raise InvalidInputError("occluder=True needs a world built with WorldConfig(occluder=True)")
+            raise SimInputError("occluder=True needs a world built with WorldConfig(occluder=True)")
         self.world, self.rng, self.poses, self.recorder = world, rng, poses, recorder
         world.reset()
         human = None
@@ -144,7 +144,7 @@ class Episode:
         With ``alternatives`` (the pose's near-symmetric twins the look could not rule out) and
         recognition on, the robot looks at the part in its hand before placing it (:mod:`sim.skills.in_hand`)."""
         if part not in self.remaining:
-            raise InvalidInputError(f"{part!r} is not waiting to be picked; remaining: {self.remaining}")
+            raise SimInputError(f"{part!r} is not waiting to be picked; remaining: {self.remaining}")
         result = pick_and_place(self.world, part, T_world_part, self.cell, alternatives,
                                 self.perception if self.poses == "recognized" else None)
         result = replace(result, looks=looks)

@@ -15,8 +15,8 @@ from typing import TYPE_CHECKING, Protocol
 import mujoco
 import numpy as np
 
-from psorr.errors import PsorrError
-from sim.control.ik import T_world_site, UnreachableTargetError, ik_for
+from sim.control.ik import T_world_site, ik_for
+from sim.errors import UnreachableTargetError, WorkspaceBlockedError
 from sim.people.human import ReachingHuman
 from sim.world import World
 
@@ -33,10 +33,6 @@ LOOK_PAN = math.pi / 2  # rad the shoulder pans from home to take the arm out of
 MAX_STOP_S = 30.0  # s a protective stop may last before the episode gives up on the move
 # N: a force with no physical effect that keeps a part awake (see ArmCell.keep_awake).
 KEEP_AWAKE_N = 1e-200
-
-
-class WorkspaceBlockedError(PsorrError):
-    """The workspace stayed occupied for longer than :data:`MAX_STOP_S`."""
 
 
 class WorkspaceMonitor(Protocol):

@@ -17,7 +17,7 @@ import mink
 import mujoco
 import numpy as np
 
-from psorr.errors import InvalidInputError, PsorrError
+from sim.errors import SimInputError, UnreachableTargetError
 from sim.world.robot import ArmConfig
 
 if TYPE_CHECKING:
@@ -25,14 +25,6 @@ if TYPE_CHECKING:
 
 CollisionPairs = Sequence[tuple[Sequence[str], Sequence[str]]]
 """Pairs (geom names A, geom names B): every geom of A keeps clear of every geom of B."""
-
-
-class UnreachableTargetError(PsorrError):
-    """The IK did not bring the tool to the target pose; ``result`` holds its closest attempt."""
-
-    def __init__(self, message: str, result: IKResult):
-        super().__init__(message)
-        self.result = result
 
 
 @dataclass(frozen=True)
@@ -111,7 +103,7 @@ class ArmIK:
         for name in (*config.arm_joints, config.tool_site):
             kind = mujoco.mjtObj.mjOBJ_SITE if name == config.tool_site else mujoco.mjtObj.mjOBJ_JOINT
             if mujoco.mj_name2id(model, kind, name) < 0:
-                raise InvalidInputError(f"the model has no {kind.name[6:].lower()} {name!r}: check ArmConfig's prefix")
+                raise SimInputError(f"the model has no {kind.name[6:].lower()} {name!r}: check ArmConfig's prefix")
         joints = [model.joint(name) for name in config.arm_joints]
         self._arm_qpos = np.array([int(j.qposadr[0]) for j in joints])
         arm_dofs = {int(j.dofadr[0]) for j in joints}
@@ -162,19 +154,19 @@ class ArmIK:
                 with ``converged=False``.
 
         Raises:
-            InvalidInputError: Bad shapes or a target that is not a rigid transform.
+            SimInputError: Bad shapes or a target that is not a rigid transform.
             UnreachableTargetError: Not converged after ``max_iters``, or no progress for a
                 long stretch (the target is out of reach or blocked).
         """
         q_start = np.asarray(q_start, dtype=float)
         T_target = np.asarray(T_world_tool_target, dtype=float)
         if q_start.shape != (self.model.nq,):
-            raise InvalidInputError(f"q_start has shape {q_start.shape}; expected ({self.model.nq},)")
+            raise SimInputError(f"q_start has shape {q_start.shape}; expected ({self.model.nq},)")
         if T_target.shape != (4, 4) or not np.all(np.isfinite(T_target)):
-            raise InvalidInputError(f"T_world_tool_target must be a finite (4, 4) pose, got shape {T_target.shape}")
+            raise SimInputError(f"T_world_tool_target must be a finite (4, 4) pose, got shape {T_target.shape}")
         R = T_target[:3, :3]
         if not np.allclose(R.T @ R, np.eye(3), atol=1e-6) or np.linalg.det(R) < 0:
-            raise InvalidInputError("T_world_tool_target's rotation is not orthonormal and right-handed")
+            raise SimInputError("T_world_tool_target's rotation is not orthonormal and right-handed")
 
         configuration = self._configuration
         if obstacles is not None and self.model.nmocap:
@@ -255,7 +247,7 @@ class ArmIK:
         if key not in self._collision_limits:
             unknown = [g for group in key for names in group for g in names if self._no_geom(g)]
             if unknown:
-                raise InvalidInputError(f"collision_geoms names geoms the model does not have: {unknown}")
+                raise SimInputError(f"collision_geoms names geoms the model does not have: {unknown}")
             # mink drops pairs that could not touch by contype/conaffinity; a named geom that collides with
             # nothing (e.g. the human occluder's "human/..." capsules) is still to be kept clear of, so it
             # counts as colliding while the pairs are listed. Distances do not depend on these bits.

@@ -21,7 +21,7 @@ import os
 import subprocess
 import sys
 
-from psorr.errors import PsorrError
+from sim.errors import RenderBackendError
 
 BACKENDS = ("egl", "osmesa")
 """Headless backends, in the order they are tried."""
@@ -37,10 +37,6 @@ ctx.free()
 """
 
 _chosen: str | None = None
-
-
-class RenderBackendError(PsorrError):
-    """No headless OpenGL backend works; the message names the backends tried and the fix."""
 
 
 def _egl_works(timeout: float = 60.0) -> bool:

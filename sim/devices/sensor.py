@@ -20,11 +20,11 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from psorr.errors import InvalidInputError
 from psorr.sensing.camera import CameraIntrinsics, depth_to_cloud
 from psorr.sensing.kinect_noise import KinectNoise, kinect_noise_with_source
 from psorr.types import PointCloud
 from sim.devices.render_backend import ensure_headless_gl
+from sim.errors import SimInputError
 
 KINECT_V1_CAMERA = CameraIntrinsics.kinect_v1()
 """640x480, f = 525 px, centred: the default camera (fovy 2 atan(240 / 525) = 49.1 deg)."""
@@ -38,7 +38,7 @@ def _camera_id(model: mujoco.MjModel, camera: str | int) -> int:
     else:
         cam_id = int(camera) if 0 <= int(camera) < model.ncam else -1
     if cam_id < 0:
-        raise InvalidInputError(f"the model has no camera {camera!r}; choose one of {names}")
+        raise SimInputError(f"the model has no camera {camera!r}; choose one of {names}")
     return cam_id
 
 
@@ -62,12 +62,12 @@ def fovy_deg(intrinsics: CameraIntrinsics) -> float:
 
 
 def check_intrinsics(intrinsics: CameraIntrinsics) -> None:
-    """Raise InvalidInputError unless MuJoCo's centred square-pixel camera can render ``intrinsics``."""
+    """Raise SimInputError unless MuJoCo's centred square-pixel camera can render ``intrinsics``."""
     centred = (intrinsics.width - 1) / 2.0, (intrinsics.height - 1) / 2.0
     if not math.isclose(intrinsics.fx, intrinsics.fy, rel_tol=1e-9) or not np.allclose(
         (intrinsics.cx, intrinsics.cy), centred
     ):
-        raise InvalidInputError(
+        raise SimInputError(
             f"MuJoCo renders a pinhole camera with square pixels and a centred principal point: need fx == fy "
             f"and (cx, cy) = {centred}, got fx={intrinsics.fx}, fy={intrinsics.fy}, "
             f"(cx, cy)=({intrinsics.cx}, {intrinsics.cy})"
@@ -138,14 +138,14 @@ class DepthCamera:
         check_intrinsics(intrinsics)
         fovy = float(model.cam_fovy[self._camera_id])
         if not math.isclose(fovy, fovy_deg(intrinsics), abs_tol=1e-3):
-            raise InvalidInputError(
+            raise SimInputError(
                 f"camera {camera_name!r} has fovy {fovy:.4f} deg but the intrinsics need {fovy_deg(intrinsics):.4f} "
                 f"(fy = {intrinsics.fy} px for {intrinsics.height} rows): set the camera's fovy or pass matching "
                 f"intrinsics"
             )
         off = (model.vis.global_.offwidth, model.vis.global_.offheight)
         if off[0] < intrinsics.width or off[1] < intrinsics.height:
-            raise InvalidInputError(
+            raise SimInputError(
                 f"the model's offscreen buffer is {off[0]}x{off[1]}, smaller than the {intrinsics.width}x"
                 f"{intrinsics.height} image: raise visual/global offwidth and offheight"
             )
@@ -166,7 +166,7 @@ class DepthCamera:
                 the frame's ``rgb`` and the cloud's colours are None.
         """
         if noise is not None and not isinstance(rng, np.random.Generator):
-            raise InvalidInputError("render with noise needs rng, a numpy.random.Generator")
+            raise SimInputError("render with noise needs rng, a numpy.random.Generator")
         r = self._renderer
         r.disable_depth_rendering()
         r.disable_segmentation_rendering()

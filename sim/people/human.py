@@ -11,7 +11,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from psorr.errors import InvalidInputError
+from sim.errors import SimInputError
 from sim.people.occluder import SHOULDER_REACH, ReachSchedule, minimum_jerk, occluder_pose, occlusion_at
 
 
@@ -36,7 +36,7 @@ class ReachingHuman:
                  first_s: tuple[float, float] = (0.0, 3.0), gap_s: tuple[float, float] = (2.0, 8.0),
                  keep_away: float = 0.25):
         if not isinstance(rng, np.random.Generator):
-            raise InvalidInputError("ReachingHuman needs rng, a numpy.random.Generator")
+            raise SimInputError("ReachingHuman needs rng, a numpy.random.Generator")
         self.rng, self.table_size, self.table_top = rng, table_size, float(table_top)
         self.targets = np.empty((0, 2)) if targets is None else np.asarray(targets, dtype=float).reshape(-1, 2)
         self.eye, self.gap_s, self.keep_away = eye, gap_s, float(keep_away)

@@ -19,8 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from psorr.errors import InvalidInputError
 from psorr.geometry.rotations import cross  # not np.cross: the person is posed 50 times a second
+from sim.errors import SimInputError
 
 PREFIX = "human/"
 SEGMENTS = ("torso", "upper_arm", "forearm", "hand")
@@ -79,15 +79,15 @@ class ReachSchedule:
         for name in ("target_xy", "hand_xy"):
             xy = tuple(float(v) for v in np.asarray(getattr(self, name), dtype=float).ravel())
             if len(xy) != 2 or not all(map(math.isfinite, xy)):
-                raise InvalidInputError(f"{name} must be 2 finite numbers (x, y) in metres, got {getattr(self, name)}")
+                raise SimInputError(f"{name} must be 2 finite numbers (x, y) in metres, got {getattr(self, name)}")
             object.__setattr__(self, name, xy)
         if min(self.start_s, self.pause_s) < 0 or min(self.reach_s, self.withdraw_s) <= 0:
-            raise InvalidInputError(
+            raise SimInputError(
                 f"need start_s, pause_s >= 0 and reach_s, withdraw_s > 0 (seconds); got {self.start_s}, "
                 f"{self.pause_s}, {self.reach_s}, {self.withdraw_s}"
             )
         if self.hand_height <= 0:
-            raise InvalidInputError(f"hand_height must be > 0 m above the table top, got {self.hand_height}")
+            raise SimInputError(f"hand_height must be > 0 m above the table top, got {self.hand_height}")
 
     @property
     def peak_s(self) -> tuple[float, float]:
@@ -127,10 +127,10 @@ class ReachSchedule:
             start_s, reach_s, pause_s, withdraw_s, hand_height: (min, max) ranges, seconds / metres.
         """
         if not isinstance(rng, np.random.Generator):
-            raise InvalidInputError("ReachSchedule.sample needs rng, a numpy.random.Generator")
+            raise SimInputError("ReachSchedule.sample needs rng, a numpy.random.Generator")
         half = np.asarray(table_size, dtype=float) / 2
         if half.shape != (2,) or np.any(half <= 0):
-            raise InvalidInputError(f"table_size must be (x, y) > 0 in metres, got {table_size}")
+            raise SimInputError(f"table_size must be (x, y) > 0 in metres, got {table_size}")
         times = [rng.uniform(*r) for r in (start_s, reach_s, pause_s, withdraw_s)]
         height = rng.uniform(*hand_height)
         if targets is None or len(targets) == 0:

@@ -26,9 +26,9 @@ import mujoco
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
-from psorr.errors import InvalidInputError, PsorrError
 from sim.control.ik import T_world_site
 from sim.devices.render_backend import ensure_headless_gl
+from sim.errors import RecordingError, SimInputError
 from sim.recording.sheet import ModelOverlay, SheetRow, height_shade, project_points, write_sheet
 from sim.world import World
 
@@ -41,10 +41,6 @@ BANNER_S = 1.5  # s of simulated time a look's or grasp's caption stays on the v
 OVERVIEW_AZIMUTH, OVERVIEW_ELEVATION = 60.0, -25.0  # deg
 OVERVIEW_DISTANCE, OVERVIEW_ABOVE_TABLE = 1.5, 0.2  # m from the look-at point; m of it above the table centre
 CLOSE_UP_ELEVATION, CLOSE_UP_DISTANCE = -15.0, 0.3  # deg; m from the tool site
-
-
-class RecordingError(PsorrError):
-    """The recording cannot be written; the message names the path and the fix."""
 
 
 class EpisodeRecorder:
@@ -60,14 +56,14 @@ class EpisodeRecorder:
 
     Raises:
         RecordingError: ``directory`` cannot be created (e.g. it is an existing file).
-        InvalidInputError: fps is not positive.
+        SimInputError: fps is not positive.
 
     Use for one episode (one world), then call :meth:`close` to get the files.
     """
 
     def __init__(self, directory: Path, name: str, fps: float = 10.0):
         if fps <= 0:
-            raise InvalidInputError(f"fps must be > 0, got {fps}; the default is 10")
+            raise SimInputError(f"fps must be > 0, got {fps}; the default is 10")
         directory = Path(directory)
         try:
             directory.mkdir(parents=True, exist_ok=True)

@@ -17,7 +17,7 @@ import numpy as np
 
 from psorr.synthetic.catalog import Grasp
 from sim.control.cell import ArmCell
-from sim.control.ik import UnreachableTargetError
+from sim.errors import UnreachableTargetError
 
 PRE_GRASP = 0.10  # m back along -approach before the approach
 LIFT = 0.10  # m the tool rises after closing; the transport runs at that height

@@ -21,7 +21,7 @@ from psorr.sensing.camera import CameraIntrinsics
 from psorr.sensing.kinect_noise import KINECT_V1
 from psorr.verification.depth_compare import DepthRenderer, differs
 from sim.control.cell import ArmCell
-from sim.control.ik import UnreachableTargetError
+from sim.errors import UnreachableTargetError
 from sim.skills.grasp_planning import angle_deg
 
 SHOW_YAWS_DEG = tuple(range(-150, 181, 30))  # tool turns about the vertical tried for the look

@@ -23,12 +23,12 @@ from typing import NamedTuple
 import mujoco
 import numpy as np
 
-from psorr.errors import InvalidInputError
 from psorr.sensing.camera import CameraIntrinsics
 from psorr.sensing.kinect_noise import KINECT_V1
 from psorr.types import Detection, PointCloud
 from sim.control.ik import T_world_site
 from sim.devices.sensor import DepthCamera, SensorFrame, T_world_camera_opencv, depth_and_bodies
+from sim.errors import SimInputError
 from sim.world import World
 
 CEILING_MARGIN = 0.03  # m above the tallest resting part before a point counts as an intrusion
@@ -135,7 +135,7 @@ class Perception:
         crop without its ceiling (the part is above it) and without the arm's pixels (the fingers'
         included). Returns the detection (camera frame) and ``T_world_camera`` (4, 4)."""
         if self._recognizer is None:
-            raise InvalidInputError("look_at_held needs a Perception built with recognize=True")
+            raise SimInputError("look_at_held needs a Perception built with recognize=True")
         frame = self.camera.render(data, self.rng, KINECT_V1, rgb=False)
         T = frame.T_world_camera
         cloud = self._workspace_cloud(frame, *self._world_points(frame))

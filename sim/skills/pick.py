@@ -14,10 +14,10 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from psorr.errors import InvalidInputError
 from psorr.synthetic.catalog import symmetry_transforms
-from sim.control.cell import ArmCell, WorkspaceBlockedError
-from sim.control.ik import T_world_site, UnreachableTargetError
+from sim.control.cell import ArmCell
+from sim.control.ik import T_world_site
+from sim.errors import SimInputError, UnreachableTargetError, WorkspaceBlockedError
 from sim.skills.grasp_planning import (
     LIFT,
     PRE_GRASP,
@@ -124,9 +124,9 @@ def pick_and_place(world: World, part: str, T_world_part_estimate: np.ndarray,
     it the way round that look finds.
     """
     if part not in world.workpieces:
-        raise InvalidInputError(f"unknown part {part!r}; the world has {list(world.workpieces)}")
+        raise SimInputError(f"unknown part {part!r}; the world has {list(world.workpieces)}")
     if part not in world.T_world_fixtures:
-        raise InvalidInputError(f"{part} has no fixture: build the world with fixtures=True")
+        raise SimInputError(f"{part} has no fixture: build the world with fixtures=True")
     cell = ArmCell(world) if cell is None else cell
     info = world.catalog[part]
     T_est = upright_equivalent(np.asarray(T_world_part_estimate, float), info)

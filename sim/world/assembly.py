@@ -28,14 +28,14 @@ from types import MappingProxyType
 import mujoco
 import numpy as np
 
-from psorr.errors import InvalidInputError
 from psorr.synthetic.catalog import WorkpieceInfo, load_catalog
 from sim.devices.sensor import T_world_camera_opencv, fovy_deg
+from sim.errors import SimInputError, WorldBuildError
 from sim.people.occluder import RADII, ReachSchedule, occluder_pose, segment_half_lengths
 from sim.world.assets import COLLISION_DIR
 from sim.world.built import HOME_KEY, World, pose_matrix, quat_of
 from sim.world.config import WorldConfig
-from sim.world.layout import WorldBuildError, place_parts, yaw_matrix
+from sim.world.layout import place_parts, yaw_matrix
 from sim.world.robot import ArmConfig, apply_arm_options, load_arm_spec
 
 CAMERA_NAME = "kinect"
@@ -151,15 +151,15 @@ def build_world(config: WorldConfig = WorldConfig(), rng: np.random.Generator | 
             schedule, which targets one of the parts).
 
     Raises:
-        InvalidInputError: an unknown workpiece name or no rng.
+        SimInputError: an unknown workpiece name or no rng.
         WorldBuildError: the collision parts are missing or stale, or the parts do not fit.
     """
     if not isinstance(rng, np.random.Generator):
-        raise InvalidInputError("build_world needs rng, a numpy.random.Generator (e.g. np.random.default_rng(0))")
+        raise SimInputError("build_world needs rng, a numpy.random.Generator (e.g. np.random.default_rng(0))")
     cfg, catalog, index = config, load_catalog(), collision_index()
     unknown = [n for n in cfg.workpieces if n not in catalog]
     if unknown:
-        raise InvalidInputError(f"unknown workpieces {unknown}; choose from {sorted(catalog)}")
+        raise SimInputError(f"unknown workpieces {unknown}; choose from {sorted(catalog)}")
     for name in cfg.workpieces:
         digest = hashlib.sha256(catalog[name].mesh_path.read_bytes()).hexdigest()
         if index.get(name, {}).get("source_sha256") != digest:

@@ -10,7 +10,7 @@ from types import MappingProxyType
 import mujoco
 import numpy as np
 
-from psorr.errors import InvalidInputError
+from sim.errors import SimInputError
 from sim.people.occluder import ReachSchedule, occluder_pose
 from sim.world.config import WorldConfig
 from sim.world.robot import ArmConfig
@@ -72,7 +72,7 @@ class World:
         data = self.data if data is None else data
         body_id = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, name)
         if body_id < 0:
-            raise InvalidInputError(f"the world has no body {name!r}; workpieces are {list(self.workpieces)}")
+            raise SimInputError(f"the world has no body {name!r}; workpieces are {list(self.workpieces)}")
         return pose_matrix(data.xpos[body_id], data.xmat[body_id].reshape(3, 3))
 
     def kinematics(self, q: np.ndarray) -> mujoco.MjData:
@@ -88,12 +88,12 @@ class World:
         or at ``poses`` (``{geom name: T_world_body}`` as :func:`sim.people.occluder.occluder_pose` gives) when given.
 
         Sets ``data.mocap_pos`` / ``mocap_quat`` (default ``self.data``); call ``mj_forward`` (or step)
-        before reading poses or rendering. Returns ``data``. InvalidInputError without an occluder.
+        before reading poses or rendering. Returns ``data``. SimInputError without an occluder.
         """
         data = self.data if data is None else data
         schedule = self.occluder if schedule is None else schedule
         if not self.occluder_geoms or schedule is None:
-            raise InvalidInputError("this world has no occluder: build it with WorldConfig(occluder=True)")
+            raise SimInputError("this world has no occluder: build it with WorldConfig(occluder=True)")
         poses = occluder_pose(schedule, t) if poses is None else poses
         for name, T in poses.items():
             mocap = self.model.body_mocapid[self.model.body(name).id]

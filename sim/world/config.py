@@ -5,9 +5,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from psorr.errors import InvalidInputError
 from psorr.sensing.camera import CameraIntrinsics
 from sim.devices.sensor import KINECT_V1_CAMERA, check_intrinsics
+from sim.errors import SimInputError
 
 
 @dataclass(frozen=True)
@@ -54,13 +54,13 @@ class WorldConfig:
     def __post_init__(self):
         object.__setattr__(self, "workpieces", tuple(self.workpieces))
         if not self.workpieces or len(set(self.workpieces)) != len(self.workpieces):
-            raise InvalidInputError(f"workpieces must name at least one part, each once; got {self.workpieces}")
+            raise SimInputError(f"workpieces must name at least one part, each once; got {self.workpieces}")
         if not 0.6 <= self.camera_height <= 1.0:
-            raise InvalidInputError(f"camera_height must lie in [0.6, 1.0] m, got {self.camera_height}")
+            raise SimInputError(f"camera_height must lie in [0.6, 1.0] m, got {self.camera_height}")
         if not 0.0 <= self.camera_tilt_deg <= 45.0:
-            raise InvalidInputError(f"camera_tilt_deg must lie in [0, 45], got {self.camera_tilt_deg}")
+            raise SimInputError(f"camera_tilt_deg must lie in [0, 45], got {self.camera_tilt_deg}")
         if min(*self.table_size, self.table_height, *self.fixture_wall, self.fixture_clearance) <= 0:
-            raise InvalidInputError("table_size, table_height, fixture_wall and fixture_clearance must be > 0")
+            raise SimInputError("table_size, table_height, fixture_wall and fixture_clearance must be > 0")
         if not 0 <= self.reach[0] < self.reach[1] or min(self.gap, self.drop_height, self.settle_time) < 0:
-            raise InvalidInputError("reach must be (min, max) with 0 <= min < max; gap, drop_height, settle_time >= 0")
+            raise SimInputError("reach must be (min, max) with 0 <= min < max; gap, drop_height, settle_time >= 0")
         check_intrinsics(self.intrinsics)

@@ -12,15 +12,11 @@ from typing import TYPE_CHECKING
 import mujoco
 import numpy as np
 
-from psorr.errors import PsorrError
 from sim.devices.sensor import T_world_camera_opencv
+from sim.errors import WorldBuildError
 
 if TYPE_CHECKING:
     from sim.world.config import WorldConfig
-
-
-class WorldBuildError(PsorrError):
-    """The world cannot be assembled as configured; the message names the cause and the fix."""
 
 
 def yaw_matrix(theta: float) -> np.ndarray:

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from psorr.errors import CloudFileError, InvalidInputError
+from sim.errors import SimInputError, TaskFileError
 from sim.world.config import WorldConfig
 
 TASK_KEYS = ("workpieces", "camera_height", "camera_tilt_deg")
@@ -27,43 +27,43 @@ def load_task(path) -> Task:
 
     path = Path(path)
     if path.is_dir():
-        raise CloudFileError(path, "is a folder, not a task file", "pass a .yaml task in it, such as tasks/demo.yaml")
+        raise TaskFileError(path, "is a folder, not a task file", "pass a .yaml task in it, such as tasks/demo.yaml")
     if not path.is_file():
-        raise CloudFileError(path, "no such task file", "see tasks/demo.yaml for the format")
+        raise TaskFileError(path, "no such task file", "see tasks/demo.yaml for the format")
     try:
         spec = yaml.load(path.read_text(encoding="utf-8"), Loader=_unique_key_loader())
     except UnicodeDecodeError:
-        raise CloudFileError(path, "not UTF-8 text", "save the task file as UTF-8 YAML") from None
+        raise TaskFileError(path, "not UTF-8 text", "save the task file as UTF-8 YAML") from None
     except yaml.YAMLError as exc:
         where = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
         at = f", line {where.line + 1}" if where is not None else ""
         problem = getattr(exc, "problem", None) or exc.__class__.__name__
-        raise CloudFileError(path, f"not valid YAML ({problem}{at})", "fix the syntax") from None
+        raise TaskFileError(path, f"not valid YAML ({problem}{at})", "fix the syntax") from None
     if not isinstance(spec, dict):
-        raise CloudFileError(path, "a task must be a mapping", f"give the keys {', '.join(TASK_KEYS)}")
+        raise TaskFileError(path, "a task must be a mapping", f"give the keys {', '.join(TASK_KEYS)}")
     unknown = sorted(set(spec) - set(TASK_KEYS))
     if unknown:
-        raise CloudFileError(path, f"unknown keys {unknown}", f"valid keys are {', '.join(TASK_KEYS)}")
+        raise TaskFileError(path, f"unknown keys {unknown}", f"valid keys are {', '.join(TASK_KEYS)}")
     parts = spec.get("workpieces")
     catalog = load_catalog()
     if not isinstance(parts, list) or not parts or not all(isinstance(p, str) for p in parts):
-        raise CloudFileError(path, "workpieces must be a non-empty list of part names",
+        raise TaskFileError(path, "workpieces must be a non-empty list of part names",
                              f"choose from {', '.join(sorted(catalog))}")
     missing = sorted(set(parts) - set(catalog))
     if missing:
-        raise CloudFileError(path, f"unknown workpieces {missing}", f"choose from {', '.join(sorted(catalog))}")
+        raise TaskFileError(path, f"unknown workpieces {missing}", f"choose from {', '.join(sorted(catalog))}")
     options = {}
     for key in ("camera_height", "camera_tilt_deg"):
         if key in spec:
             value = spec[key]
             # YAML reads `true` as a bool, which float() would take for 1.0.
             if isinstance(value, bool) or not isinstance(value, (int, float)):
-                raise CloudFileError(path, f"{key} must be a number, got {value!r}", "see tasks/demo.yaml")
+                raise TaskFileError(path, f"{key} must be a number, got {value!r}", "see tasks/demo.yaml")
             options[key] = float(value)
     try:
         return Task(path, WorldConfig(workpieces=tuple(parts), **options))
-    except InvalidInputError as exc:  # a value out of range, or a part listed twice: this file's fault
-        raise CloudFileError(path, str(exc)) from None
+    except SimInputError as exc:  # a value out of range, or a part listed twice: this file's fault
+        raise TaskFileError(path, str(exc)) from None
 
 
 def _unique_key_loader():

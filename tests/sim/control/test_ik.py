@@ -5,7 +5,8 @@ import pytest
 from arm_scenes import CFG, TOOL_DOWN, arm_scene, tool_pose
 
 from psorr.errors import InvalidInputError, PsorrError
-from sim.control.ik import ArmIK, UnreachableTargetError
+from sim.control.ik import ArmIK
+from sim.errors import UnreachableTargetError
 from sim.world.robot import load_arm_spec
 
 

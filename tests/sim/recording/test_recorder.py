@@ -12,7 +12,8 @@ from psorr.errors import PsorrError
 from psorr.types import Detection
 from sim.devices.sensor import DepthCamera
 from sim.episode import run_episode
-from sim.recording.recorder import EpisodeRecorder, RecordingError
+from sim.errors import RecordingError
+from sim.recording.recorder import EpisodeRecorder
 from sim.skills.perception import Estimate, Look
 from sim.world import WorldConfig, build_world
 

@@ -1,0 +1,65 @@
+"""The sim's exception hierarchy: everything the sim raises on purpose derives from :class:`SimError`.
+
+``SimError`` is a :class:`psorr.errors.PsorrError`, so one ``except PsorrError`` catches the recognizer's
+errors and the cell's alike (``psorr-sim`` prints either as one line). An error about bad input is also
+psorr's :class:`~psorr.errors.InvalidInputError` (and so a ``ValueError``), and an error about a bad task
+file is also its :class:`~psorr.errors.CloudFileError`, so code written against psorr's hierarchy keeps
+catching them. Every message names the cause and the fix, or the valid choices.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from psorr.errors import CloudFileError, InvalidInputError, PsorrError
+from psorr.synthetic.catalog import CatalogError
+
+if TYPE_CHECKING:
+    from sim.control.ik import IKResult
+
+
+class SimError(PsorrError):
+    """Root of every error the sim raises on purpose; catch this to handle them all."""
+
+
+class SimInputError(SimError, InvalidInputError):
+    """An argument has the wrong type or value (an unknown part, a mode, a range); the message names the
+    valid choices."""
+
+
+class TaskFileError(SimError, CloudFileError):
+    """A task file (``tasks/*.yaml``) is missing, unreadable or asks for something the cell cannot be;
+    the message names the file, the problem and the fix."""
+
+
+class GraspCatalogError(SimError, CatalogError):
+    """The workpiece catalog's grasps cannot be read; the message names the file, the problem and the fix."""
+
+
+class WorldBuildError(SimError):
+    """The world cannot be assembled as configured; the message names the cause and the fix."""
+
+
+class RenderBackendError(SimError):
+    """No headless OpenGL backend works; the message names the backends tried and the fix."""
+
+
+class UnreachableTargetError(SimError):
+    """The IK did not bring the tool to the target pose; ``result`` holds its closest attempt."""
+
+    def __init__(self, message: str, result: IKResult):
+        super().__init__(message)
+        self.result = result
+
+
+class WorkspaceBlockedError(SimError):
+    """Someone kept reaching over the table for longer than a protective stop may last
+    (:data:`sim.control.cell.MAX_STOP_S`)."""
+
+
+class RecordingError(SimError):
+    """The recording cannot be written; the message names the path and the fix."""
+
+
+class ResetNeededError(SimError):
+    """The env was stepped or rendered before :meth:`sim.env.PickPlaceEnv.reset`."""
