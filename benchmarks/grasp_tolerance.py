@@ -42,6 +42,7 @@ from tqdm import tqdm
 
 from psorr.errors import PsorrError
 from psorr.synthetic.catalog import load_catalog
+from sim.skills.grasps import grasp_named
 from sim.skills.pick import PLACE_TOL_DEG, PLACE_TOL_MM, pick_and_place
 from sim.world import WorldConfig, build_world
 
@@ -93,7 +94,7 @@ def relative_to_closing(trial: dict, info) -> str:
     """Whether a translation trial's direction ran along, across or diagonal to the executed grasp's closing axis."""
     if not trial["grasp"]:
         return "no grasp"
-    c = np.asarray(info.grasp(trial["grasp"]).closing, float)[:2]
+    c = np.asarray(grasp_named(info.name, trial["grasp"]).closing, float)[:2]
     a = math.radians(float(trial["direction"]))
     cos = abs(float(np.dot(c / np.linalg.norm(c), (math.cos(a), math.sin(a)))))
     return "along" if cos > 0.9 else "across" if cos < 0.1 else "diagonal"

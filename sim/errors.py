@@ -2,9 +2,10 @@
 
 ``SimError`` is a :class:`psorr.errors.PsorrError`, so one ``except PsorrError`` catches the recognizer's
 errors and the cell's alike (``psorr-sim`` prints either as one line). An error about bad input is also
-psorr's :class:`~psorr.errors.InvalidInputError` (and so a ``ValueError``), and an error about a bad task
-file is also its :class:`~psorr.errors.CloudFileError`, so code written against psorr's hierarchy keeps
-catching them. Every message names the cause and the fix, or the valid choices.
+psorr's :class:`~psorr.errors.InvalidInputError` (and so a ``ValueError``), an error about a bad task
+file is also its :class:`~psorr.errors.CloudFileError`, and one about the catalog's grasps also its
+:class:`~psorr.synthetic.catalog.CatalogError`, so code written against psorr's hierarchy keeps catching
+them. Every message names the cause and the fix, or the valid choices.
 """
 
 from __future__ import annotations

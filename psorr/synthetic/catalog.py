@@ -1,10 +1,11 @@
 """The workpiece catalog and the symmetry-aware pose error.
 
 The catalog (assets/workpieces/catalog.json, written by assets/workpieces/build_workpieces.py)
-lists every part the cell handles: its CAD mesh, mass, display colour, the
-rigid transforms that map the mesh onto itself, and gripper grasps. Units are
-metres and kilograms; transforms are 4x4 arrays in the part's model frame
-(origin at the centre of the resting face, +z up).
+lists every part the cell handles: its CAD mesh, mass, display colour and the
+rigid transforms that map the mesh onto itself. Units are metres and kilograms;
+transforms are 4x4 arrays in the part's model frame (origin at the centre of the
+resting face, +z up). The file also lists each part's gripper grasps, which only
+the simulated cell uses and reads itself (sim/skills/grasps.py).
 """
 
 from __future__ import annotations
@@ -65,33 +66,6 @@ def _rigid(value, name: str) -> np.ndarray:
 
 
 @dataclass(frozen=True, eq=False)
-class Grasp:
-    """A parallel-gripper grasp in the model frame.
-
-    Attributes:
-        name: label, unique within the part.
-        point: (3,) metres, the centre between the fingertips when closed.
-        approach: (3,) unit vector the gripper travels along towards the part ((0, 0, -1): from above).
-        closing: (3,) unit vector along which the fingers close, perpendicular to `approach`.
-        width: metres between the two parallel faces the fingers close on.
-    """
-
-    name: str
-    point: np.ndarray
-    approach: np.ndarray
-    closing: np.ndarray
-    width: float
-
-    def __post_init__(self):
-        object.__setattr__(self, "point", _vector(self.point, f"grasp {self.name!r} point", (3,)))
-        object.__setattr__(self, "approach", _vector(self.approach, f"grasp {self.name!r} approach", (3,), True))
-        object.__setattr__(self, "closing", _vector(self.closing, f"grasp {self.name!r} closing", (3,), True))
-        if abs(float(self.approach @ self.closing)) > _UNIT_TOL:
-            raise InvalidInputError(f"grasp {self.name!r}: closing must be perpendicular to approach")
-        object.__setattr__(self, "width", _positive(self.width, f"grasp {self.name!r} width (metres)"))
-
-
-@dataclass(frozen=True, eq=False)
 class WorkpieceInfo:
     """One catalog part.
 
@@ -103,7 +77,6 @@ class WorkpieceInfo:
         symmetries: (K, 4, 4) model-frame transforms S with S(mesh) = mesh; the first is the identity.
         continuous_axis: (3,) unit direction through the model origin about which the part is a
             surface of revolution, or None.
-        grasps: the part's grasps.
     """
 
     name: str
@@ -112,7 +85,6 @@ class WorkpieceInfo:
     color: np.ndarray
     symmetries: np.ndarray
     continuous_axis: np.ndarray | None
-    grasps: tuple[Grasp, ...]
 
     def __post_init__(self):
         object.__setattr__(self, "mesh_path", Path(self.mesh_path))
@@ -129,7 +101,6 @@ class WorkpieceInfo:
         if self.continuous_axis is not None:
             axis = _vector(self.continuous_axis, f"{self.name} continuous_axis", (3,), True)
             object.__setattr__(self, "continuous_axis", axis)
-        object.__setattr__(self, "grasps", tuple(self.grasps))
 
     def load_mesh(self):
         """The part's trimesh.Trimesh (metres, model frame); CloudFileError if unreadable."""
@@ -140,13 +111,6 @@ class WorkpieceInfo:
     def bounds(self) -> np.ndarray:
         """(2, 3) read-only model-frame bounds of the mesh (lo, hi), metres; read once per path."""
         return _mesh_bounds(self.mesh_path)
-
-    def grasp(self, name: str) -> Grasp:
-        """The grasp called `name`; InvalidInputError naming the valid ones otherwise."""
-        for g in self.grasps:
-            if g.name == name:
-                return g
-        raise InvalidInputError(f"{self.name} has no grasp {name!r}; choose one of {[g.name for g in self.grasps]}")
 
 
 @functools.lru_cache(maxsize=64)
@@ -161,9 +125,6 @@ def _mesh_bounds(path: Path) -> np.ndarray:
 def _parse_part(path: Path, name: str, entry) -> WorkpieceInfo:
     try:
         mesh_path = (path.parent / entry["mesh"]).resolve()
-        grasps = tuple(
-            Grasp(g["name"], g["point"], g["approach"], g["closing"], g["width"]) for g in entry.get("grasps", [])
-        )
         info = WorkpieceInfo(
             name=name,
             mesh_path=mesh_path,
@@ -171,7 +132,6 @@ def _parse_part(path: Path, name: str, entry) -> WorkpieceInfo:
             color=entry["color"],
             symmetries=entry.get("symmetries", [np.eye(4).tolist()]),
             continuous_axis=entry.get("continuous_axis"),
-            grasps=grasps,
         )
     except KeyError as exc:
         raise CatalogError(path, f"part {name!r} lacks the key {exc}", _REBUILD) from None

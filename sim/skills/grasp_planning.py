@@ -1,6 +1,7 @@
 """Grasp planning: which catalog grasp, approached how, reaching which tool poses.
 
-:func:`plan_grasp` takes a part's pose estimate and returns the first grasp (catalog order) that
+:func:`plan_grasp` takes a part's pose estimate and returns the first grasp (catalog order, read by
+:mod:`sim.skills.grasps`) that
 is narrower than the gripper, not a thin-wall pinch, approached from above, and whose pre-grasp,
 grasp, above-fixture and place poses the IK reaches; grasps whose pads fit inside the fixture's
 pocket come first, the others are released above the pocket's walls. Nothing here reads the
@@ -15,9 +16,9 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from psorr.synthetic.catalog import Grasp
 from sim.control.cell import ArmCell
 from sim.errors import UnreachableTargetError
+from sim.skills.grasps import Grasp, load_grasps
 
 PRE_GRASP = 0.10  # m back along -approach before the approach
 LIFT = 0.10  # m the tool rises after closing; the transport runs at that height
@@ -86,7 +87,7 @@ def plan_grasp(cell: ArmCell, part: str, T_est: np.ndarray) -> tuple[GraspPlan |
     q0 = cell.data.qpos.copy()
     q0[cell.qadr] = cell.model.key(cell.cfg.home_key).qpos[cell.qadr]
     reasons, candidates = [], []
-    for index, grasp in enumerate(info.grasps):
+    for index, grasp in enumerate(load_grasps().get(part, ())):
         if grasp.width >= world.arm.max_opening:
             reasons.append(f"{grasp.name}: {grasp.width * 1e3:.0f} mm too wide")
             continue

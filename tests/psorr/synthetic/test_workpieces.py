@@ -1,5 +1,6 @@
 """Tests for the workpiece assets (meshes, catalog) and psorr.synthetic.catalog: sound, stable meshes,
-true symmetries, grasps that fit and can be reached, the symmetric ADD, and a deterministic build."""
+true symmetries, the symmetric ADD, and a deterministic build. The catalog's grasps are the sim's
+(tests/sim/skills/test_grasps.py)."""
 
 from __future__ import annotations
 
@@ -26,14 +27,6 @@ from psorr.synthetic.catalog import (
 ASSETS = DEFAULT_CATALOG.parent
 CATALOG = load_catalog()
 NAMES = sorted(CATALOG)
-GRASPS = [(name, g.name) for name in NAMES for g in CATALOG[name].grasps]
-# The gripper: a parallel jaw with box fingers; metres.
-OPENING = 0.080  # widest finger separation
-CLEARANCE = 0.005  # fingers open this far beyond each contact face before closing
-FINGER_LENGTH = 0.045  # along the approach, fingertip to palm
-FINGER_WIDTH = 0.016  # across both approach and closing
-FINGER_THICKNESS = 0.008  # along closing
-TIP_PAST_POINT = 0.005  # the pads are centred on the grasp point, so the tips reach this much further
 
 
 @cache
@@ -46,20 +39,6 @@ def _rot_z(deg: float) -> np.ndarray:
     t = np.eye(4)
     t[:2, :2] = [[c, -s], [s, c]]
     return t
-
-
-def _first_hits(mesh, origins, direction):
-    """(N,) distance from each origin along `direction` to the first surface hit (inf: none), (N, 3) hit normals."""
-    origins = np.atleast_2d(origins)
-    directions = np.tile(direction, (len(origins), 1))
-    locations, rays, triangles = mesh.ray.intersects_location(origins, directions, multiple_hits=True)
-    distance = np.full(len(origins), np.inf)
-    normal = np.zeros((len(origins), 3))
-    for location, ray, triangle in zip(locations, rays, triangles):
-        d = float((location - origins[ray]) @ direction)
-        if d < distance[ray]:
-            distance[ray], normal[ray] = d, mesh.face_normals[triangle]
-    return distance, normal
 
 
 @pytest.mark.parametrize("name", NAMES)
@@ -86,13 +65,10 @@ def test_mass_is_volume_times_density(name):
     assert CATALOG[name].mass == pytest.approx(_mesh(name).volume * entry["density"], rel=1e-4)
 
 
-def test_colours_and_grasp_names_are_distinct():
+def test_colours_are_distinct():
     colours = np.array([CATALOG[n].color for n in NAMES])
     gaps = np.linalg.norm(colours[:, None] - colours[None], axis=2) + np.eye(len(NAMES))
     assert gaps.min() > 0.1
-    for name in NAMES:
-        names = [g.name for g in CATALOG[name].grasps]
-        assert len(set(names)) == len(names)
 
 
 @pytest.mark.parametrize("name", NAMES)
@@ -113,56 +89,6 @@ def test_a_non_symmetry_does_not_map_the_mesh_onto_itself(name):
     samples = trimesh.sample.sample_surface(mesh, 2000, seed=0)[0]
     moved = trimesh.transform_points(samples, _rot_z(37.0))
     assert trimesh.proximity.closest_point(mesh, moved)[1].max() > 0.002
-
-
-@pytest.mark.parametrize("name", NAMES)
-def test_every_part_has_a_grasp_the_gripper_can_hold(name):
-    widths = [g.width for g in CATALOG[name].grasps]
-    assert max(widths) <= OPENING - 2 * CLEARANCE
-    assert any(0.010 <= w <= 0.070 for w in widths)
-
-
-@pytest.mark.parametrize(("name", "grasp_name"), GRASPS)
-def test_grasp_width_is_the_thickness_between_parallel_faces(name, grasp_name):
-    mesh, grasp = _mesh(name), CATALOG[name].grasp(grasp_name)
-    reach = grasp.width / 2 + CLEARANCE
-    for side in (1.0, -1.0):
-        start = grasp.point + side * reach * grasp.closing
-        assert not mesh.contains([start])[0], "the open finger would start inside the part"
-        distance, normal = _first_hits(mesh, start, -side * grasp.closing)
-        # The contact face sits exactly width / 2 from the point and faces the finger.
-        assert distance[0] == pytest.approx(CLEARANCE, abs=1e-5)
-        assert normal[0] @ (side * grasp.closing) > 0.999
-
-
-@pytest.mark.parametrize(("name", "grasp_name"), GRASPS)
-def test_grasp_is_reachable_along_its_approach(name, grasp_name):
-    mesh, grasp = _mesh(name), CATALOG[name].grasp(grasp_name)
-    across = np.cross(grasp.approach, grasp.closing)
-    reach = grasp.width / 2 + CLEARANCE
-    far = 0.5  # start the rays well outside the part
-    # Both fingers sweep down to their tips without touching the part...
-    for side in (1.0, -1.0):
-        tips = np.array(
-            [
-                grasp.point + side * (reach + t) * grasp.closing + u * across + TIP_PAST_POINT * grasp.approach
-                for t in (0.0, FINGER_THICKNESS / 2, FINGER_THICKNESS)
-                for u in (-FINGER_WIDTH / 2, 0.0, FINGER_WIDTH / 2)
-            ]
-        )
-        assert np.all(tips[:, 2] >= 0.0), "a fingertip would hit the table"
-        distance, _ = _first_hits(mesh, tips - far * grasp.approach, grasp.approach)
-        assert np.all(distance > far), "a finger would collide with the part on the way in"
-    # ...and nothing of the part between them rises to the palm.
-    palm = np.array(
-        [
-            grasp.point + t * grasp.closing + u * across
-            for t in np.linspace(-reach - FINGER_THICKNESS, reach + FINGER_THICKNESS, 9)
-            for u in (-FINGER_WIDTH / 2, 0.0, FINGER_WIDTH / 2)
-        ]
-    )
-    distance, _ = _first_hits(mesh, palm - far * grasp.approach, grasp.approach)
-    assert np.all(far - distance < FINGER_LENGTH), "the part would hit the palm"
 
 
 @pytest.mark.parametrize("name", NAMES)
