@@ -1,5 +1,5 @@
 """False detections on real Kinect clouds that hold none of our parts, PSORR and ORR, on one core;
-each also with the continuation check off (RecognizeParams.max_continued=None, psorr.acceptance.continuation),
+each also with the continuation check off (AcceptParams.max_continued=None, psorr.acceptance.continuation),
 to show what the check removes.
 
 The OSD learn set's 45 clouds show boxes, stacked boxes, occluded objects and cylinders on a table.
@@ -22,10 +22,10 @@ import _single_core  # noqa: F401  (must precede numpy)
 import numpy as np
 from tqdm import tqdm
 
+from psorr import AcceptParams, RecognizeParams
 from psorr.io.clouds import read_cloud
 from psorr.library.models import ModelLibrary
 from psorr.recognize import Recognizer
-from psorr.recognize_params import RecognizeParams
 from psorr.synthetic.catalog import load_catalog
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -84,9 +84,9 @@ def main(argv=None) -> int:
     records, shown = {}, []
     settings = [(m, RecognizeParams()) for m in args.methods.split(",")]
     if args.check_off:
-        settings += [(m, RecognizeParams(max_continued=None)) for m in args.methods.split(",")]
+        settings += [(m, RecognizeParams(acceptance=AcceptParams(max_continued=None))) for m in args.methods.split(",")]
     for method, params in settings:
-        label = method if params.max_continued is not None else f"{method}, continuation check off"
+        label = method if params.acceptance.max_continued is not None else f"{method}, continuation check off"
         recognizer = Recognizer(library, method, params)
         records[label] = []
         for path in tqdm(paths, desc=label, file=sys.stderr):
@@ -96,7 +96,7 @@ def main(argv=None) -> int:
                                     "detections": [{"model": d.model, "score": round(d.score, 3),
                                                     "pose": np.round(d.T_cloud_model, 5).tolist()}
                                                    for d in result.detections]})
-            if result.detections and params.max_continued is not None:
+            if result.detections and params.acceptance.max_continued is not None:
                 shown.append((f"{label}: {path.stem}", cloud, result.detections))
     lines = [f"{len(paths)} OSD learn clouds (none holds a catalog part), all 8 catalog parts as candidates; "
              "every detection is false.", "",

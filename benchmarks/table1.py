@@ -142,8 +142,8 @@ def main(argv=None) -> int:
               f"{elapsed:.0f} s wall on 1 core. "
               f"Counts are over seeds; hypotheses, ms and pose errors are medians over seeds (pose errors "
               f"over the recognised runs; in brackets, the nearest detection of the right model when none "
-              f"was within 0.1 d). ORR draws up to RecognizeParams.orr_hypotheses = "
-              f"{RecognizeParams().orr_hypotheses} hypotheses.")
+              f"was within 0.1 d). ORR draws up to OrrParams.hypotheses = "
+              f"{RecognizeParams().orr.hypotheses} hypotheses.")
     print(table)
     print()
     print(text)

@@ -37,7 +37,7 @@ from tqdm import tqdm
 
 import psorr.hypotheses.orr
 import psorr.hypotheses.pairs
-import psorr.recognize
+import psorr.hypotheses.point_ranking
 import psorr.verification.box_score
 import psorr.verification.point_check
 from psorr import ModelLibrary, Recognizer
@@ -72,7 +72,7 @@ class Recorder:
             return check_poses(*args, **kwargs)
 
         psorr.hypotheses.pairs.box_scores = boxes
-        psorr.recognize.check_poses = points  # PSORR's single-face and single-cylinder screening
+        psorr.hypotheses.point_ranking.check_poses = points  # PSORR's single-face and single-cylinder screening
         psorr.hypotheses.orr.check_poses = points
         self.box_scores, self.check_poses = box_scores, check_poses
 
@@ -260,7 +260,7 @@ def main(argv=None) -> int:
     library = ModelLibrary.from_meshes([catalog[n].mesh_path for n in sorted(catalog)])
     meshes = {n: catalog[n].load_mesh() for n in catalog}
     recognizers = {m: Recognizer(library, method=m) for m in ("psorr", "orr")}
-    compiled = Compiled(library, recognizers["psorr"]._pair_candidates._model_prims)
+    compiled = Compiled(library, recognizers["psorr"].pairs.model_primitives)
     measured_ms, measured_n = {"psorr": 0.0, "orr": 0.0}, {"psorr": 0, "orr": 0}
     rows = {}
     bar = tqdm(list(table1_cases(meshes, OBJECTS, ("full", "partial"), seeds)), desc="recording Table 1's cases",

@@ -2,30 +2,50 @@
 
 Decompose depth clouds into planes and cylinders and their primitive shape
 graph; recognise CAD-trained workpieces from it. Never imports the simulator.
+The pipeline's stages live in subpackages named after them: psorr.io,
+psorr.decomposition, psorr.library, psorr.hypotheses, psorr.verification,
+psorr.acceptance (and psorr.sensing, psorr.synthetic for scenes).
 """
 
+from psorr.acceptance.params import AcceptParams
 from psorr.decomposition import DecomposeParams, Decomposition, decompose
+from psorr.decomposition.detail import DetailParams
+from psorr.decomposition.support_crop import SupportCropParams
 from psorr.errors import CloudFileError, InvalidInputError, PsorrError
-from psorr.library.models import ModelLibrary
+from psorr.hypotheses.orr import OrrParams
+from psorr.hypotheses.pairs import PairParams
+from psorr.hypotheses.single_cylinder import SingleCylinderParams
+from psorr.hypotheses.single_plane import SinglePlaneParams
+from psorr.library import ModelLibrary
 from psorr.recognize import Recognizer
-from psorr.recognize_params import RecognizeParams
+from psorr.recognize_params import Method, Recognition, RecognitionStats, RecognizeParams
 from psorr.types import Detection, OrientedBox, PointCloud, Primitive, PrimitiveKind, PrimitiveShapeGraph
 
 __all__ = [
+    "AcceptParams",
     "CloudFileError",
+    "DecomposeParams",
     "Decomposition",
     "Detection",
-    "ModelLibrary",
-    "Recognizer",
-    "RecognizeParams",
-    "DecomposeParams",
+    "DetailParams",
     "InvalidInputError",
+    "Method",
+    "ModelLibrary",
     "OrientedBox",
+    "OrrParams",
+    "PairParams",
     "PointCloud",
     "Primitive",
     "PrimitiveKind",
     "PrimitiveShapeGraph",
     "PsorrError",
+    "Recognition",
+    "RecognitionStats",
+    "RecognizeParams",
+    "Recognizer",
+    "SingleCylinderParams",
+    "SinglePlaneParams",
+    "SupportCropParams",
     "decompose",
 ]
 __version__ = "0.1.0"

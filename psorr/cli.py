@@ -13,6 +13,7 @@ import numpy as np
 
 from psorr.checks.clouds import require_seen_from_origin, require_sensor_metres
 from psorr.errors import CloudFileError, InvalidInputError, PsorrError
+from psorr.types import Method
 
 # DecomposeParams.voxel_size, which a test holds this to: importing the pipeline for --help costs a second.
 DEFAULT_VOXEL_SIZE = 0.012
@@ -117,7 +118,7 @@ def _recognize(args) -> int:
     library = library_from_arguments(args.models, units=args.units,
                                      progress=lambda xs: tqdm(xs, desc="training", file=sys.stderr))
     _log(f"read {args.scene}: {len(cloud)} points; models {', '.join(library.names)}")
-    params = RecognizeParams(max_float=None, max_continued=None) if args.stacked else RecognizeParams()
+    params = RecognizeParams().for_stacked_parts() if args.stacked else RecognizeParams()
     result = Recognizer(library, method=args.method, params=params).recognize(cloud, np.random.default_rng(args.seed))
     stats = result.stats
     if args.png:
@@ -161,7 +162,7 @@ def build_parser() -> argparse.ArgumentParser:
                      help="a folder of meshes (.stl/.obj/.ply), mesh files, or a saved library (.npz); "
                           "each model is named by its file stem")
     rec.add_argument("scene", metavar="SCENE", help="cloud file in metres, sensor frame, table and all")
-    rec.add_argument("--method", choices=("psorr", "orr"), default="psorr")
+    rec.add_argument("--method", choices=[m.value for m in Method], default=Method.PSORR.value)
     rec.add_argument("--units", choices=("m", "mm"), default=None,
                      help="units of the meshes (default m; meshes of implausible size are refused without it)")
     rec.add_argument("--json", action="store_true", help="print exactly one JSON line to stdout")

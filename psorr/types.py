@@ -87,6 +87,14 @@ class PointCloud:
         return mask
 
 
+class Method(StrEnum):
+    """Where recognition's hypotheses come from: PSORR's pairs of scene primitives, or ORR's random pairs of
+    points (Papazov and Burschka's baseline)."""
+
+    PSORR = "psorr"
+    ORR = "orr"
+
+
 class PrimitiveKind(StrEnum):
     """The shape families a cloud is decomposed into."""
 

@@ -110,22 +110,37 @@ class PixelClaims:
         self.owner[free] = index
 
 
+@dataclass(frozen=True, eq=False)
+class SearchResult:
+    """What one recognize() call found, in the order accepted, and what it cost: hypotheses screened, the
+    ms their screening took, and the ms spent decomposing the scene."""
+
+    detections: tuple[Detection, ...]
+    hypotheses: int
+    verify_ms: float
+    decomposition_ms: float
+
+
 @dataclass
 class SearchTally:
-    """What one recognize() call has found so far, and its cost."""
+    """What one recognize() call has found so far, and its cost: ``claims`` holds the detections and the
+    claim cells they explain."""
 
+    claims: PixelClaims
     decomposition_ms: float = 0.0
-    claims: PixelClaims | None = None  # the detections, and the 4x4-pixel blocks they explain
     hypotheses: int = 0
     verify_ms: float = 0.0
 
     @property
     def detections(self) -> list[Detection]:
-        return self.claims.detections if self.claims is not None else []
+        return self.claims.detections
 
     def add(self, hypotheses: int, verify_ms: float) -> None:
         self.hypotheses += hypotheses
         self.verify_ms += verify_ms
+
+    def result(self) -> SearchResult:
+        return SearchResult(tuple(self.detections), self.hypotheses, self.verify_ms, self.decomposition_ms)
 
 
 def _weight(score: float, clean: float | None, n_blocks: int) -> float:

@@ -12,9 +12,38 @@ from dataclasses import replace
 import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
 
 from psorr.decomposition.support_crop import along_plane
 from psorr.types import PointCloud
+
+
+class DetectedSurfaces:
+    """The library's models' surface samples (``models``: those of a ModelLibrary), for asking which points
+    the detections so far explain: those within ``reach`` metres of a detected model's samples at its pose."""
+
+    def __init__(self, models, reach: float):
+        self.trees = {m.name: cKDTree(m.points) for m in models}
+        self.reach = reach
+
+    def explain(self, detections, points: np.ndarray, share: float = 0.5) -> bool:
+        """Does at least ``share`` of ``points`` (M, 3), a primitive's, lie on the surface of one of
+        ``detections``? The whole surface, not the pixels it covers: a part's far side in a full view is
+        explained too, and a part behind a detected one is not."""
+        points = points[:: max(1, len(points) // 200)]
+        return any(on_detected_surface(points, d, self.trees, self.reach).mean() >= share for d in detections)
+
+    def unexplained(self, cloud: PointCloud, plane: np.ndarray | None, detections, off_plane: float,
+                    largest: float, min_points: int) -> PointCloud | None:
+        """``cloud`` with the points standing on the supporting ``plane`` blanked where ``detections`` explain
+        them, or where they form groups too large to be one part (:func:`part_sized`, ``largest`` metres);
+        None when fewer than ``min_points`` stand unexplained."""
+        standing = standing_points(cloud, plane, off_plane)
+        rest = standing_unexplained(cloud, standing, detections, self.trees, self.reach)
+        rest = part_sized(cloud, plane, rest, largest)
+        if rest.sum() < min_points:
+            return None
+        return blanked(cloud, standing & ~rest)
 
 
 def on_detected_surface(points: np.ndarray, detection, model_trees: dict, reach: float) -> np.ndarray:

@@ -1,4 +1,4 @@
-"""A second, finer decomposition of what the first one left unlabelled.
+"""Finer decompositions: of what the first one left unlabelled, and of what recognition left unexplained.
 
 A voxel size that keeps a whole table top fast (8 mm) is too coarse for a
 part's small faces: a circuit board's components, a bush's 10 mm flange ring
@@ -12,15 +12,48 @@ from __future__ import annotations
 
 import dataclasses
 import time
+from dataclasses import dataclass
 
 import numpy as np
 
+from psorr.checks import params as check
 from psorr.decomposition.pipeline import DecomposeParams, Decomposition, DecompositionStats, decompose
 from psorr.decomposition.psg import close_pairs
 from psorr.errors import InvalidInputError, TooSparseError
 from psorr.types import PointCloud, PrimitiveShapeGraph
 
 _EDGE_SAMPLES = 400  # inliers per primitive that decide the edges between the two passes' primitives
+
+
+@dataclass(frozen=True)
+class DetailParams:
+    """The finer passes of recognition's decomposition; voxels in metres, None turns a pass off.
+
+    ``leftover_voxel``: the points the first decomposition left unlabelled, decomposed again at this voxel.
+    ``fine_voxel``: what stands on the table unexplained after the search, decomposed again at this voxel
+    and searched again, if at least ``min_unexplained`` points (a detection needs acceptance's min_support).
+    """
+
+    leftover_voxel: float | None = 0.005
+    fine_voxel: float | None = 0.005
+    min_unexplained: int = 100
+
+    def __post_init__(self):
+        check.positive(self, "leftover_voxel", "fine_voxel", unit=" metres", optional=True)
+        check.whole(self, "min_unexplained")
+
+
+def decompose_with_leftovers(cloud: PointCloud, params: DecomposeParams, leftover_voxel: float | None,
+                             rng: np.random.Generator) -> Decomposition | None:
+    """``cloud`` decomposed, and its unlabelled points again at ``leftover_voxel`` metres (unless None); None
+    when the cloud is too sparse to decompose (a handful of points, or a few clumps: nothing to find)."""
+    try:
+        scene = decompose(cloud, params, rng)
+    except TooSparseError:
+        return None
+    if leftover_voxel is not None:
+        scene = decompose_leftovers(cloud, scene, leftover_voxel, params, rng)
+    return scene
 
 
 def decompose_leftovers(cloud: PointCloud, coarse: Decomposition, voxel_size: float, params: DecomposeParams,

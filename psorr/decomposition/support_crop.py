@@ -91,16 +91,3 @@ def _near_cells(cells: np.ndarray, occupied: np.ndarray, reach: int) -> np.ndarr
     near = np.zeros(len(cells), dtype=bool)
     near[inside] = grid[x[inside], y[inside]]
     return near
-
-
-def floats_above(plane: np.ndarray | None, model_points: np.ndarray, T_cloud_model: np.ndarray,
-                 max_float: float | None) -> bool:
-    """Do ``model_points`` (N, 3), posed by ``T_cloud_model`` (4, 4), all lie more than ``max_float`` metres
-    above the supporting ``plane`` (a, b, c, d; the sensor on its positive side)? Parts rest on the table: a
-    plate can lie on an arm reaching across the view, within the depth tolerance of its 35 mm radius over
-    most of its width, and no check on the measured surface tells it from a real one. False without a plane
-    or with max_float None (stacked parts)."""
-    if max_float is None or plane is None:
-        return False
-    lowest = (model_points @ T_cloud_model[:3, :3].T + T_cloud_model[:3, 3]) @ plane[:3] + plane[3]
-    return bool(lowest.min() > max_float)

@@ -10,30 +10,56 @@ acceptance.
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 
 import numpy as np
 
+from psorr.checks import params as check
+from psorr.hypotheses.candidates import CandidateSet
 from psorr.hypotheses.pose_clusters import densest_poses, share_out
 from psorr.hypotheses.primitive_match import PrimitiveSizes
 from psorr.library.models import ModelLibrary
-from psorr.recognize_params import RecognizeParams
 from psorr.verification.box_score import PrimitiveArrays, box_scores
+
+
+@dataclass(frozen=True)
+class PairParams:
+    """Settings of the pair stage; distances in metres.
+
+    Each round clusters the pair poses by vote (on a ``cluster_cell`` position grid) and keeps the
+    ``max_hypotheses`` best-supported; those are screened by box score, with the boxes thickened to
+    ``box_thickness`` (pair poses are off by a centimetre or so), and the ``refine_top`` best scoring at
+    least ``min_box_score`` (shared out across models) go on to acceptance. After a round's detections,
+    the pairs are made again among the primitives they leave unexplained, for up to ``pair_rounds`` rounds.
+    """
+
+    max_hypotheses: int = 100
+    cluster_cell: float = 0.02
+    min_box_score: float = 0.1
+    box_thickness: float = 0.04
+    refine_top: int = 24
+    pair_rounds: int = 2
+
+    def __post_init__(self):
+        check.whole(self, "max_hypotheses", "refine_top", "pair_rounds")
+        check.positive(self, "cluster_cell", "box_thickness", unit=" metres")
+        check.within(self, "min_box_score")
 
 
 class PairCandidates:
     """The library's models, prepared for pairing: primitive sizes, boxes and centres."""
 
-    def __init__(self, library: ModelLibrary, params: RecognizeParams):
-        self.library, self.params = library, params
+    def __init__(self, library: ModelLibrary, params: PairParams | None = None):
+        self.library, self.params = library, params or PairParams()
         self.max_diameter = max(m.diameter for m in library.models)
         self._sizes = PrimitiveSizes(library.models)
         self._model_centres = np.array([m.points.mean(axis=0) for m in library.models])  # (M, 3), model frames
-        self._model_prims = [PrimitiveArrays.of(m.graph.primitives) for m in library.models]
+        self.model_primitives = [PrimitiveArrays.of(m.graph.primitives) for m in library.models]
 
-    def __call__(self, pts: np.ndarray, nrm: np.ndarray, scene_prims) -> tuple[list, int, float]:
+    def __call__(self, pts: np.ndarray, nrm: np.ndarray, scene_prims) -> CandidateSet:
         """Pose hypotheses from pairs of the scene's oriented points (K, 3) and their primitives: matched
-        in the hash table, clustered by vote, and the best by box score. Returns the (model index, pose)
-        candidates, the number of clustered hypotheses, and the ms spent verifying them."""
+        in the hash table, clustered by vote, and the best by box score, with the number of clustered
+        hypotheses and the ms spent verifying them."""
         p = self.params
         poses, models = np.empty((0, 4, 4)), np.empty(0, dtype=np.int64)
         if len(pts) >= 2:  # pairs need two oriented points
@@ -47,11 +73,11 @@ class PairCandidates:
                 poses, models = densest_poses(poses, models, scene_index, self._model_centres, p.cluster_cell,
                                               p.max_hypotheses)
         t1 = time.perf_counter()
-        scores = box_scores(self._model_prims, poses, PrimitiveArrays.of(scene_prims), p.box_thickness, models)
+        scores = box_scores(self.model_primitives, poses, PrimitiveArrays.of(scene_prims), p.box_thickness, models)
         order = np.argsort(-scores, kind="stable")
         order = share_out(order[scores[order] >= p.min_box_score], models, p.refine_top)
         verify_ms = (time.perf_counter() - t1) * 1e3
-        return [(models[k], poses[k]) for k in order], len(poses), verify_ms
+        return CandidateSet.chosen(models, poses, order, len(poses), verify_ms)
 
     def _plausible(self, scene_prims, i, j, scene_index, rows):
         """The lookup matches whose scene primitives could be parts of their model primitives (kind, size)."""

@@ -27,6 +27,8 @@ import numpy as np
 from psorr.checks import params as check
 from psorr.errors import InvalidInputError
 from psorr.geometry.boxes import orthonormal_frame
+from psorr.hypotheses.candidates import CandidateSet
+from psorr.hypotheses.point_ranking import ranked_by_point_check
 from psorr.hypotheses.primitive_match import RADIUS_TOLERANCE
 from psorr.types import Primitive, PrimitiveKind
 from psorr.verification.point_check import CheckParams, check_pose
@@ -119,6 +121,7 @@ class SingleCylinderMatcher:
 
     def __init__(self, models, params: SingleCylinderParams | None = None):
         self.params = params = params or SingleCylinderParams()
+        self.models = list(models)
         self.cylinders = []  # (model index, radius, length, inverse axis frame (4, 4))
         self.beyond = {}  # model index -> (points (N, 3), normals (N, 3)) off its long cylinders
         for index, model in enumerate(models):
@@ -132,6 +135,12 @@ class SingleCylinderMatcher:
                     near |= _near_cylinder(model.points, p, length)
             if near.any():
                 self.beyond[index] = (model.points[~near], model.normals[~near])
+
+    def candidates(self, view, scene_cylinders: list[Primitive]) -> CandidateSet:
+        """The poses of :meth:`hypotheses`, ranked by the coarse point check in ``view`` (a SceneView)."""
+        p = self.params
+        poses, owners = self.hypotheses(scene_cylinders)
+        return ranked_by_point_check(view, self.models, poses, owners, p.check, p.min_score, p.top)
 
     def hypotheses(self, scene_cylinders: list[Primitive]) -> tuple[np.ndarray, np.ndarray]:
         """Poses (K, 4, 4) ``T_cloud_model`` and model indices (K,) from scene cylinders matched by size."""

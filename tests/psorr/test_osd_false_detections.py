@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from paths import SHARED
 
+from psorr import AcceptParams
 from psorr.io.clouds import read_cloud
 from psorr.recognize import RecognizeParams, Recognizer
 
@@ -21,6 +22,6 @@ def test_a_pose_only_the_table_supports_is_not_a_detection(library, scene, metho
     if not path.is_file():
         pytest.skip(f"{path} is absent (the OSD data set is not installed)")
     cloud = read_cloud(path)
-    ruled_off = Recognizer(library, method, RecognizeParams(min_support_above_table=0))
+    ruled_off = Recognizer(library, method, RecognizeParams(acceptance=AcceptParams(min_support_above_table=0)))
     assert [d.model for d in ruled_off.recognize(cloud, np.random.default_rng(0)).detections] == [model]
     assert Recognizer(library, method).recognize(cloud, np.random.default_rng(0)).detections == ()

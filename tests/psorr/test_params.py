@@ -9,25 +9,31 @@ import pytest
 import trimesh
 
 from psorr.acceptance.continuation import ContinuationParams
+from psorr.acceptance.params import AcceptParams
 from psorr.decomposition import DecomposeParams, decompose
+from psorr.decomposition.detail import DetailParams
 from psorr.decomposition.support_crop import SupportCropParams
 from psorr.errors import InvalidInputError
+from psorr.hypotheses.orr import OrrParams
+from psorr.hypotheses.pairs import PairParams
 from psorr.hypotheses.single_cylinder import SingleCylinderParams
 from psorr.hypotheses.single_plane import SinglePlaneParams
 from psorr.library.models import ModelLibrary, TrainParams
 from psorr.recognize import RecognizeParams, Recognizer
 from psorr.synthetic import primitive_scenes as synthetic
+from psorr.types import Method
 from psorr.verification.point_check import CheckParams
 
 NAN = float("nan")
 CLASSES = [DecomposeParams, RecognizeParams, TrainParams, ContinuationParams, CheckParams, SinglePlaneParams,
-           SingleCylinderParams, SupportCropParams]
+           SingleCylinderParams, SupportCropParams, AcceptParams, PairParams, OrrParams, DetailParams]
 
 REPORTED = [
-    (RecognizeParams, "max_hypotheses", NAN),
-    (RecognizeParams, "min_support_above_table", NAN),
-    (RecognizeParams, "icp_distance", "0.01"),
+    (PairParams, "max_hypotheses", NAN),
+    (AcceptParams, "min_support_above_table", NAN),
+    (AcceptParams, "icp_distance", "0.01"),
     (RecognizeParams, "decompose", "x"),
+    (RecognizeParams, "acceptance", {"icp_distance": 0.01}),
     (DecomposeParams, "k_neighbours", NAN),
     (DecomposeParams, "voxel_size", "0.01"),
     (DecomposeParams, "cylinder_radius_range", (0.1,)),
@@ -90,17 +96,19 @@ def test_defaults_pass_and_numpy_numbers_are_kept_as_given(cls):
 
 
 def test_optional_fields_take_none_and_turned_off_checks_take_zero():
-    p = RecognizeParams(leftover_voxel=None, fine_voxel=None, max_float=None, max_continued=None,
-                        min_support_above_table=0)
+    assert DetailParams(leftover_voxel=None, fine_voxel=None).fine_voxel is None
+    p = AcceptParams(max_float=None, max_continued=None, min_support_above_table=0)
     assert p.max_float is None and p.min_support_above_table == 0
+    stacked = RecognizeParams().for_stacked_parts().acceptance
+    assert stacked.max_float is None and stacked.max_continued is None and stacked.max_shared_pixels == 0.3
     assert DecomposeParams(cylinder_radius_range=[0.01, 0.1]).cylinder_radius_range == [0.01, 0.1]
 
 
 def test_range_errors_keep_their_wording():
-    with pytest.raises(InvalidInputError, match=r"RecognizeParams.icp_distance must be > 0 metres, got 0"):
-        RecognizeParams(icp_distance=0)
+    with pytest.raises(InvalidInputError, match=r"AcceptParams.icp_distance must be > 0 metres, got 0"):
+        AcceptParams(icp_distance=0)
     with pytest.raises(InvalidInputError, match=r"min_support_above_table must be >= 0 \(0 turns it off\)"):
-        RecognizeParams(min_support_above_table=NAN)
+        AcceptParams(min_support_above_table=NAN)
     with pytest.raises(InvalidInputError, match=r"k_neighbours must be >= 1 and a whole number \(an int\), got 2.5"):
         DecomposeParams(k_neighbours=2.5)
     with pytest.raises(InvalidInputError, match=r"cylinder_radius_range must be \(min, max\) with 0 < min < max"):
@@ -130,11 +138,23 @@ def block_library(tmp_path_factory):
     return ModelLibrary.from_meshes([folder / "block.stl"], use_cache=False)
 
 
-@pytest.mark.parametrize("bad", [{"refine_top": 4}, {}, "fast", DecomposeParams()])
+@pytest.mark.parametrize("bad", [{"pairs": {"refine_top": 4}}, {}, "fast", DecomposeParams(), PairParams()])
 def test_a_recognizer_takes_only_recognize_params(block_library, bad):
-    with pytest.raises(InvalidInputError, match=r"params must be a RecognizeParams.*RecognizeParams\(\*\*settings\)"):
+    with pytest.raises(InvalidInputError, match=r"params must be a RecognizeParams.*RecognizeParams\(acceptance="):
         Recognizer(block_library, params=bad)
-    assert Recognizer(block_library, params=RecognizeParams(refine_top=4)).params.refine_top == 4
+    params = RecognizeParams(pairs=PairParams(refine_top=4))
+    assert Recognizer(block_library, params=params).pairs.params.refine_top == 4
+
+
+@pytest.mark.parametrize("method", ["psorr", "orr", Method.PSORR, Method.ORR])
+def test_a_recognizer_takes_a_method_by_name_or_enum(block_library, method):
+    assert Recognizer(block_library, method=method).method is Method(method)
+
+
+@pytest.mark.parametrize("bad", ["PSORR ", "ppf", None, 1])
+def test_an_unknown_method_names_the_valid_ones(block_library, bad):
+    with pytest.raises(InvalidInputError, match=r"unknown method .*choose one of \['psorr', 'orr'\]"):
+        Recognizer(block_library, method=bad)
 
 
 @pytest.mark.parametrize("kwargs, field", [({"angle_step_deg": "12"}, "angle_step_deg"),

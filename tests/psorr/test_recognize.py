@@ -14,6 +14,7 @@ import sys
 import numpy as np
 import pytest
 
+from psorr import AcceptParams, DetailParams, PairParams
 from psorr.errors import InvalidInputError
 from psorr.io.clouds import write_cloud
 from psorr.recognize import RecognizeParams, Recognizer
@@ -26,6 +27,11 @@ from psorr.verification.scene_view import SceneView
 @pytest.fixture(scope="module")
 def catalog():
     return load_catalog()
+
+
+def _accepting(**settings) -> RecognizeParams:
+    """The default settings but these of acceptance's."""
+    return RecognizeParams(acceptance=AcceptParams(**settings))
 
 
 def _matches(det, instance, library, catalog) -> bool:
@@ -73,7 +79,7 @@ def test_single_parts_are_recognised(library, catalog):
             # Per search (the first, and the finer second look), pair clusters each round plus poses from
             # single faces and cylinders left unexplained.
             params = RecognizeParams()
-            per_search = (params.pair_rounds * params.max_hypotheses + params.single_plane.max_poses
+            per_search = (params.pairs.pair_rounds * params.pairs.max_hypotheses + params.single_plane.max_poses
                           + params.single_cylinder.max_poses)
             assert result.stats.hypotheses <= 2 * per_search
     assert found >= 0.95 * total, f"single-part recall {found}/{total}"
@@ -101,7 +107,7 @@ def test_a_second_pairing_round_finds_a_part_the_first_crowded_out(library, cata
     bushing = next(inst for inst in scene.instances if inst.name == "bushing")
 
     def bushing_found(rounds):
-        params = RecognizeParams(pair_rounds=rounds, fine_voxel=None)
+        params = RecognizeParams(pairs=PairParams(pair_rounds=rounds), detail=DetailParams(fine_voxel=None))
         result = Recognizer(library, params=params).recognize(scene.cloud)
         return result, any(_matches(d, bushing, library, catalog) for d in result.detections)
 
@@ -123,9 +129,9 @@ def test_a_part_mostly_hidden_behind_others_is_judged_by_what_could_be_seen(libr
         return [d for d in Recognizer(library, params=params).recognize(scene.cloud).detections
                 if _matches(d, chassis, library, catalog)]
 
-    assert not chassis_found(RecognizeParams(min_unblocked_fraction=1.0))
+    assert not chassis_found(RecognizeParams(acceptance=AcceptParams(min_unblocked_fraction=1.0)))
     found = chassis_found(RecognizeParams())
-    assert len(found) == 1 and found[0].visible_fraction < RecognizeParams().min_visible_fraction
+    assert len(found) == 1 and found[0].visible_fraction < AcceptParams().min_visible_fraction
 
 
 def test_partly_hidden_parts_of_the_occluded_benchmark_scenes_are_found(library, catalog):
@@ -167,7 +173,7 @@ def test_what_stands_unexplained_gets_a_finer_second_look(library, catalog):
         result = Recognizer(library, params=params).recognize(scene.cloud)
         return result, [d for d in result.detections if _matches(d, scene.instances[0], library, catalog)]
 
-    coarse_only, missed = found(RecognizeParams(fine_voxel=None))
+    coarse_only, missed = found(RecognizeParams(detail=DetailParams(fine_voxel=None)))
     both, hit = found(RecognizeParams())
     assert not missed and len(hit) == 1 and len(both.detections) == 1
     assert both.stats.hypotheses > coarse_only.stats.hypotheses
@@ -185,14 +191,14 @@ def test_a_part_floating_on_the_arm_is_not_taken(library, catalog):
 
     # The continuation check drops this bracket too (the capsule goes on past its plates); it is off here
     # so that the float limit is tested alone, and on alone below.
-    anywhere = Recognizer(library, params=RecognizeParams(max_float=None, max_continued=None)).recognize(scene.cloud)
-    resting = Recognizer(library, params=RecognizeParams(max_continued=None)).recognize(scene.cloud)
+    anywhere = Recognizer(library, params=RecognizeParams().for_stacked_parts()).recognize(scene.cloud)
+    resting = Recognizer(library, params=_accepting(max_continued=None)).recognize(scene.cloud)
     assert any(lowest(d) > 0.1 for d in anywhere.detections)
-    assert resting.detections and all(lowest(d) <= RecognizeParams().max_float for d in resting.detections)
+    assert resting.detections and all(lowest(d) <= AcceptParams().max_float for d in resting.detections)
     f_any, fp_any = _score(scene, anywhere.detections, library, catalog)
     f_rest, fp_rest = _score(scene, resting.detections, library, catalog)
     assert f_rest >= f_any and fp_rest < fp_any
-    continued = Recognizer(library, params=RecognizeParams(max_float=None)).recognize(scene.cloud).detections
+    continued = Recognizer(library, params=_accepting(max_float=None)).recognize(scene.cloud).detections
     assert not any(lowest(d) > 0.1 for d in continued)
 
 

@@ -65,12 +65,13 @@ def test_a_pose_that_shows_nothing_continues_nothing():
 
 
 def test_the_recognizer_drops_a_small_block_found_on_a_large_one_unless_the_check_is_off(tmp_path, monkeypatch):
-    from psorr import ModelLibrary, RecognizeParams, Recognizer
+    from psorr import AcceptParams, ModelLibrary, RecognizeParams, Recognizer
 
     monkeypatch.setenv("PSORR_CACHE", str(tmp_path / "cache"))
     _block(0.08, 0.06, 0.06).export(tmp_path / "small.stl")
     library = ModelLibrary.from_meshes([tmp_path / "small.stl"])
-    plain, checked = Recognizer(library, params=RecognizeParams(max_continued=None)), Recognizer(library)
+    unchecked = RecognizeParams(acceptance=AcceptParams(max_continued=None))
+    plain, checked = Recognizer(library, params=unchecked), Recognizer(library)
     for seed in (1, 3):  # layouts where the small block's faces fit the large block's top and side
         scene = workpiece_scene(np.random.default_rng(seed), {"large": _block(0.24, 0.16, 0.06)}, ["large"])
         assert plain.recognize(scene.cloud, np.random.default_rng(0)).detections  # a false detection ...

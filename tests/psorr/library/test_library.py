@@ -174,19 +174,20 @@ def test_two_meshes_with_one_name_are_refused_before_training(tmp_path, monkeypa
 
 def test_bad_settings_name_the_field():
     from psorr.acceptance.continuation import ContinuationParams
+    from psorr.acceptance.params import AcceptParams
+    from psorr.hypotheses.pairs import PairParams
     from psorr.library.models import TrainParams
-    from psorr.recognize import RecognizeParams
 
     with pytest.raises(Exception, match="refine_top"):
-        RecognizeParams(refine_top=0)
+        PairParams(refine_top=0)
     with pytest.raises(Exception, match="min_visible_fraction"):
-        RecognizeParams(min_visible_fraction=1.5)
+        AcceptParams(min_visible_fraction=1.5)
     with pytest.raises(Exception, match="max_continued must lie in"):
-        RecognizeParams(max_continued=2.0)
-    assert RecognizeParams(max_continued=None).max_continued is None  # the check can be turned off
+        AcceptParams(max_continued=2.0)
+    assert AcceptParams(max_continued=None).max_continued is None  # the check can be turned off
     with pytest.raises(InvalidInputError, match="min_support_above_table must be >= 0"):
-        RecognizeParams(min_support_above_table=-1)
-    assert RecognizeParams(min_support_above_table=0).min_support_above_table == 0  # and this one
+        AcceptParams(min_support_above_table=-1)
+    assert AcceptParams(min_support_above_table=0).min_support_above_table == 0  # and this one
     with pytest.raises(InvalidInputError, match="ContinuationParams.neighbours"):
         ContinuationParams(neighbours=0)
     with pytest.raises(InvalidInputError, match="ContinuationParams.ring"):

@@ -92,12 +92,12 @@ def test_a_fine_buffer_numbers_only_the_self_occlusion_cells_in_use(scene_and_mo
 def test_support_the_table_explains_as_well_is_not_counted_above_it():
     # A circuit board is 1.6 mm thick: posed flat anywhere on a bare table, its face is supported by the
     # table. Only its components, at the true pose, stand higher than the depth tolerance.
-    from psorr.recognize_params import RecognizeParams
+    from psorr.acceptance.params import AcceptParams
 
     catalog = load_catalog()
     library = ModelLibrary.from_meshes([catalog["circuit_board"].mesh_path])
     board = library.model("circuit_board")
-    needed = RecognizeParams().min_support_above_table
+    needed = AcceptParams().min_support_above_table
     for seed in range(2):
         scene = workpiece_scene(np.random.default_rng(seed), {"circuit_board": catalog["circuit_board"].load_mesh()},
                                 ["circuit_board"])

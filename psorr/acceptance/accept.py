@@ -1,0 +1,191 @@
+"""Acceptance: screened candidates fitted by ICP, judged by the point check, and settled against the
+detections so far by the pixels they explain.
+
+Most candidates are wrong, and one coarse ICP shows it, so the fine ICP and the dense point check are
+kept for the rest (:meth:`Acceptance.fit`). The survivors claim the pixels they explain, best first
+(:class:`~psorr.acceptance.claims.PixelClaims`); only the few that win their pixels are told from their
+near-symmetric twins by render and compare, and checked for a larger object around them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from psorr.acceptance.ambiguity import NearSymmetryResolver
+from psorr.acceptance.claims import PixelClaims
+from psorr.acceptance.continuation import on_larger_object
+from psorr.acceptance.icp import refine_icp
+from psorr.acceptance.params import AcceptParams
+from psorr.hypotheses.candidates import Candidate
+from psorr.hypotheses.pose_clusters import same_pose
+from psorr.hypotheses.single_cylinder import SingleCylinderMatcher
+from psorr.library.models import Model, ModelLibrary
+from psorr.types import Detection
+from psorr.verification.point_check import CheckParams, PoseCheck, check_pose
+from psorr.verification.scene_view import SceneView
+
+_COARSE = CheckParams(max_points=300)  # the coarse fit's point check: enough to tell the hopeless candidates
+_COARSE_ITERATIONS, _COARSE_POINTS = 15, 1000  # the coarse ICP's, as above
+
+
+@dataclass(frozen=True, eq=False)
+class Fitted:
+    """A candidate after ICP whose point check passed acceptance's bars: ``model`` at ``T_cloud_model``."""
+
+    model: Model
+    T_cloud_model: np.ndarray
+    check: PoseCheck
+
+
+@dataclass(frozen=True, eq=False)
+class Claim:
+    """A resolved detection, the point check its pixels come from, and the earlier detections it displaces."""
+
+    detection: Detection
+    check: PoseCheck
+    displaced: list[int]
+
+
+class Acceptance:
+    """Turns candidates into detections for one library. ``coarse_max_violation`` is the seen-through share
+    above which a candidate is given up after its coarse fit (candidates of random point pairs start rougher
+    than those of primitive pairs)."""
+
+    def __init__(self, library: ModelLibrary, params: AcceptParams, coarse_max_violation: float):
+        self.library, self.params, self.coarse_max_violation = library, params, coarse_max_violation
+        # Built up front, as model preparation: found on a model's first detection instead, its
+        # near-symmetries would add about 0.1 s to that scene.
+        self.resolvers = {m.name: NearSymmetryResolver(m) for m in library.models}
+
+    def __call__(self, view: SceneView, candidates, claims: PixelClaims,
+                 beyond: SingleCylinderMatcher | None = None) -> list[Detection]:
+        """The new detections among ``candidates`` (:class:`Candidate`), added to ``claims``. A candidate that
+        shares more than max_shared_pixels of its pixels with earlier detections is dropped, unless it scores
+        higher, when it displaces them. Poses from one cylinder (``beyond``) must also be supported off the
+        model's long cylinders."""
+        fitted = [f for c in candidates if (f := self.fit(view, c, beyond)) is not None]
+        fitted.sort(key=lambda f: -f.check.score)
+        return self._settle(view, fitted, claims)
+
+    def refine(self, view: SceneView, model: Model, T_cloud_model: np.ndarray) -> Detection:
+        """A known pose judged as candidates are: coarse then fine ICP, and its near-symmetric twins told apart."""
+        return self._resolved(view, model, self._fine_icp(view, model, self._coarse_icp(view, model, T_cloud_model)))
+
+    def fit(self, view: SceneView, candidate: Candidate, beyond: SingleCylinderMatcher | None = None) -> Fitted | None:
+        """The candidate fitted (coarse, then fine ICP) and point-checked, or None when it fails a bar."""
+        model = self.library.models[candidate.model]
+        T, coarse = self._coarse_fit(view, model, candidate.T_cloud_model)
+        if self._hopeless(coarse):
+            return None
+        T = self._fine_icp(view, model, T)
+        check = check_pose(view, model.points, model.normals, T, self.params.check)
+        passes = self._passes(view, model, T, check) and (
+            beyond is None or beyond.seen_beyond(view, candidate.model, T, self.params.check,
+                                                 self.params.max_violation_ratio))
+        return Fitted(model, T, check) if passes else None
+
+    def _coarse_icp(self, view, model, T):
+        return refine_icp(view, model.points, model.normals, T, self.params.icp_distance,
+                          iterations=_COARSE_ITERATIONS, max_points=_COARSE_POINTS, skip_holes=True)
+
+    def _coarse_fit(self, view, model, T) -> tuple[np.ndarray, PoseCheck]:
+        """The coarse ICP of a candidate, and its coarse point check. A part that slides almost onto
+        itself (a channel) is also fitted from where the data place it along its length, and the better
+        fit is kept: a slide judged from a tilted start went 2-5 cm the wrong way, from starts the plain
+        fit took to within 0.6 mm."""
+        starts = [T]
+        slid = self.resolvers[model.name].slide_onto_surface(view, T, _COARSE)
+        if not np.array_equal(slid, T):
+            starts.append(slid)
+        fits = [self._coarse_icp(view, model, S) for S in starts]
+        checks = [check_pose(view, model.points, model.normals, F, _COARSE) for F in fits]
+        best = max(range(len(fits)), key=lambda k: checks[k].score)
+        return fits[best], checks[best]
+
+    def _hopeless(self, coarse: PoseCheck) -> bool:
+        """Too little of the model measured after the coarse fit (of its surface, and of what nearer ones
+        leave in view), or too much of it seen through."""
+        p = self.params
+        unseen = (coarse.visible_fraction < p.min_visible_fraction / 2
+                  and coarse.unblocked_fraction < p.min_unblocked_fraction / 2)
+        return unseen or coarse.violation_ratio > self.coarse_max_violation
+
+    def _fine_icp(self, view, model, T):
+        p = self.params
+        return refine_icp(view, model.points, model.normals, T, p.icp_distance / 3, max_points=p.icp_points)
+
+    def _passes(self, view: SceneView, model: Model, T: np.ndarray, check: PoseCheck) -> bool:
+        """Does the fitted pose clear the bars: seen enough, supported enough (above the table too), not
+        seen through, and resting on the supporting plane rather than floating over it?"""
+        p = self.params
+        seen_enough = (check.visible_fraction >= p.min_visible_fraction
+                       or check.unblocked_fraction >= p.min_unblocked_fraction)
+        enough_support = (check.n_support >= p.min_support
+                          and check.n_support_above_table >= p.min_support_above_table)
+        return (enough_support and seen_enough and check.violation_ratio <= p.max_violation_ratio
+                and not floats_above(view.support_plane, model.points[::4], T, p.max_float))
+
+    def _resolved(self, view: SceneView, model: Model, T: np.ndarray) -> Detection:
+        """The detection at ``T``, or at the near-symmetric twin the view prefers, with those it left open."""
+        T, check, alternatives = self.resolvers[model.name].resolve(view, T, self.params.icp_distance)
+        return Detection(model.name, T, check.score, check.visible_fraction, alternatives)
+
+    def _settle(self, view: SceneView, fitted: list[Fitted], claims: PixelClaims) -> list[Detection]:
+        """The ``fitted`` (best first) that win their pixels in ``claims`` and sit on no larger object, added
+        to it; those a later one displaced here are left out."""
+        resolved_from: list[tuple[Model, np.ndarray]] = []  # the poses resolved here, as found
+        accepted = []
+        for f in fitted:
+            claim = self._claim(view, f, claims, resolved_from)
+            if claim is None or on_larger_object(view, f.model.points, f.model.normals,
+                                                 claim.detection.T_cloud_model, self.params.max_continued,
+                                                 self.params.continuation):
+                continue
+            c = claim.check
+            claims.add(claim.detection, c.supported_blocks, c.score, claim.displaced, 1 - c.violation_ratio)
+            accepted.append(claim.detection)
+        standing = {id(d) for d in claims.detections}
+        return [d for d in accepted if id(d) in standing]
+
+    def _claim(self, view: SceneView, f: Fitted, claims: PixelClaims, resolved_from: list) -> Claim | None:
+        """The detection ``f`` resolves to, if it wins its pixels: at its own pose, or, when it loses them
+        and may be a twin pose (an L bracket's legs swapped), at the pose its near-symmetries take it to.
+        Only now, on the few survivors, is a dense check affordable: it tells a part from its near-symmetric
+        twin pose (a tray turned end for end) by the small features."""
+        c = f.check
+        displaced = claims.rivals(c.supported_blocks, c.score, 1 - c.violation_ratio)
+        if displaced is None and not self._second_chance(f, resolved_from):
+            return None
+        resolved_from.append((f.model, f.T_cloud_model))
+        detection = self._resolved(view, f.model, f.T_cloud_model)
+        if displaced is None:
+            c = check_pose(view, f.model.points, f.model.normals, detection.T_cloud_model, self.params.check)
+            displaced = claims.rivals(c.supported_blocks, c.score, 1 - c.violation_ratio)
+            if displaced is None:
+                return None
+        return Claim(detection, c, displaced)
+
+    def _second_chance(self, f: Fitted, resolved_from: list) -> bool:
+        """May a candidate that lost its pixels be a twin pose that one candidate resolved to, keeping the
+        pixels from one its near-symmetries take to the true pose? Only for parts whose twins the point check
+        tells apart (a chassis turned end for end scored 0.808 to the true 0.800), and not for a copy of a pose
+        already resolved, which resolves alike."""
+        model = f.model
+        return self.resolvers[model.name].has_broad_twins and not any(
+            m is model and same_pose(model.points[::50], f.T_cloud_model, R, 0.05 * model.diameter)
+            for m, R in resolved_from)
+
+
+def floats_above(plane: np.ndarray | None, model_points: np.ndarray, T_cloud_model: np.ndarray,
+                 max_float: float | None) -> bool:
+    """Do ``model_points`` (N, 3), posed by ``T_cloud_model`` (4, 4), all lie more than ``max_float`` metres
+    above the supporting ``plane`` (a, b, c, d; the sensor on its positive side)? Parts rest on the table: a
+    plate can lie on an arm reaching across the view, within the depth tolerance of its 35 mm radius over
+    most of its width, and no check on the measured surface tells it from a real one. False without a plane
+    or with max_float None (stacked parts)."""
+    if max_float is None or plane is None:
+        return False
+    lowest = (model_points @ T_cloud_model[:3, :3].T + T_cloud_model[:3, 3]) @ plane[:3] + plane[3]
+    return bool(lowest.min() > max_float)

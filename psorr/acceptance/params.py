@@ -1,0 +1,55 @@
+"""Settings of acceptance: the ICP that fits a candidate, and the bars its point check must clear."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from psorr.acceptance.continuation import ContinuationParams
+from psorr.checks import params as check
+from psorr.verification.point_check import CheckParams
+
+
+@dataclass(frozen=True)
+class AcceptParams:
+    """Settings of acceptance; distances in metres, shares in [0, 1].
+
+    A candidate is fitted by point-to-plane ICP pairing points within ``icp_distance`` (the fine pass
+    within a third of it, with ``icp_points`` model points), then point-checked (``check``). It is accepted
+    when at least ``min_visible_fraction`` of its surface is measured, or, for a part partly hidden by
+    others, ``min_unblocked_fraction`` of its unhidden points; when at least ``min_support`` points are
+    supported, ``min_support_above_table`` of them higher above the supporting plane than their depth
+    tolerance; when at most ``max_violation_ratio`` of the measured points are seen through; when its lowest
+    point is no more than ``max_float`` above the supporting plane; and when the measured surface goes on
+    past its outline on no more than ``max_continued`` of a ring around it (``continuation``). A detection
+    sharing more than ``max_shared_pixels`` of its pixels with a better one is dropped.
+    """
+
+    icp_distance: float = 0.012
+    icp_points: int = 1500  # model points in the fine ICP (3000: a fifth more time, 0.05 mm better ADD)
+    check: CheckParams = field(default_factory=CheckParams)
+    min_visible_fraction: float = 0.35
+    min_unblocked_fraction: float = 0.6
+    max_violation_ratio: float = 0.15
+    min_support: int = 60
+    # The table explains the rest as well: a circuit board lying flat is supported by the table wherever
+    # it is posed on it; ORR placed 7 on the far table of 45 real clouds (README, "Real clouds that hold
+    # none of our parts"). True detections in heavy clutter kept 63 or more. 0 turns this off, for a part
+    # so thin (a bare plate) that nothing of it stands higher than the tolerance.
+    min_support_above_table: int = 30
+    max_float: float | None = 0.02  # None: parts piled on one another
+    max_shared_pixels: float = 0.3
+    # None turns the check off (it costs about 2 ms a scene): parts flush with larger objects (stacked edge
+    # to edge, in a fitting corner) need it off.
+    max_continued: float | None = 0.2
+    continuation: ContinuationParams = field(default_factory=ContinuationParams)
+
+    def __post_init__(self):
+        check.whole(self, "min_support", "icp_points")
+        check.whole(self, "min_support_above_table", minimum=0, note=" (0 turns it off)")
+        check.positive(self, "max_float", unit=" metres", optional=True)
+        check.positive(self, "icp_distance", unit=" metres")
+        check.within(self, "min_visible_fraction", "min_unblocked_fraction", "max_violation_ratio",
+                     "max_shared_pixels")
+        check.within(self, "max_continued", optional=True)
+        check.instance(self, "check", CheckParams)
+        check.instance(self, "continuation", ContinuationParams)

@@ -1,0 +1,34 @@
+"""What a hypothesis stage hands on to acceptance: screened candidate poses, and what screening them cost."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True, eq=False)
+class Candidate:
+    """One screened pose hypothesis: the library's ``model`` (an index into ``ModelLibrary.models``) at
+    ``T_cloud_model`` (4, 4), mapping model coordinates (metres) into the cloud's frame."""
+
+    model: int
+    T_cloud_model: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class CandidateSet:
+    """The candidates a hypothesis stage passes on, best first, with the number of hypotheses it screened
+    to choose them and the milliseconds the screening (verification, not the making of poses) took."""
+
+    candidates: tuple[Candidate, ...] = ()
+    hypotheses: int = 0
+    verify_ms: float = 0.0
+
+    def __len__(self) -> int:
+        return len(self.candidates)
+
+    @classmethod
+    def chosen(cls, models: np.ndarray, poses: np.ndarray, order, hypotheses: int, verify_ms: float) -> CandidateSet:
+        """The candidates ``order`` picks (indices into ``models`` (K,) and ``poses`` (K, 4, 4)), in that order."""
+        return cls(tuple(Candidate(int(models[k]), poses[k]) for k in order), hypotheses, verify_ms)
