@@ -28,11 +28,12 @@ from tqdm import tqdm
 from psorr.errors import PsorrError
 from sim.cli import summarize
 from sim.episode import run_episode
+from sim.modes import PoseSource
 from sim.world import build_world
 from sim.world.tasks import load_task
 
 ROOT = Path(__file__).resolve().parents[1]
-MODES = ("oracle", "recognized")
+MODES = (PoseSource.ORACLE, PoseSource.RECOGNIZED)
 TARGETS = {"grasp": 0.95, "gap_points": 3.0, "place": 0.90, "wall_s": 20.0}
 
 

@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from psorr.cli import at_least_one, check_output, run_parsed, seed
+from sim.modes import PoseSource, choices
 
 
 def _log(message: str) -> None:
@@ -163,7 +164,7 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("task", metavar="TASK.yaml", help="task file, e.g. tasks/demo.yaml")
     run.add_argument("--episodes", type=at_least_one, default=1, help="how many seeded episodes (default 1)")
     run.add_argument("--seed", type=seed, default=0)
-    run.add_argument("--poses", choices=("recognized", "oracle"), default="recognized",
+    run.add_argument("--poses", choices=choices(PoseSource), default=PoseSource.RECOGNIZED.value,
                      help="grasp from the recognizer's poses (default) or the true ones")
     run.add_argument("--occluder", choices=("on", "off"), default="on",
                      help="a person reaches over the table now and then (default on); the robot waits for them")

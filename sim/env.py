@@ -47,8 +47,9 @@ from gymnasium import spaces
 
 from psorr.sensing.kinect_noise import KINECT_V1
 from sim.devices.render_backend import ensure_headless_gl
-from sim.episode import MAX_EPISODE_S, MIN_SCORE, POSE_MODES, Episode
+from sim.episode import MAX_EPISODE_S, MIN_SCORE, Episode
 from sim.errors import ResetNeededError, SimInputError, WorkspaceBlockedError
+from sim.modes import PoseSource, parse_mode
 from sim.skills.grasp_planning import upright_equivalent
 from sim.skills.perception import Estimate, Look
 from sim.skills.pick import REST_TOL, PickResult
@@ -67,7 +68,8 @@ class PickPlaceEnv(gym.Env):
     Args:
         task: a task file (``tasks/*.yaml``; a relative path not found from the working directory is
             taken from the repository root) or a :class:`sim.world.WorldConfig`.
-        poses: ``"recognized"`` (PSORR on the Kinect's cloud) or ``"oracle"`` (the simulator's true poses).
+        poses: a :class:`~sim.modes.PoseSource` or its string, ``"recognized"`` (PSORR on the Kinect's
+            cloud) or ``"oracle"`` (the simulator's true poses).
         occluder: a person reaches over the table now and then; overrides the config's ``occluder``.
         render_mode: None or ``"rgb_array"``.
         max_steps: actions (refused ones included) after which the episode is truncated and the parts
@@ -82,10 +84,10 @@ class PickPlaceEnv(gym.Env):
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 1}  # a frame per step; a wait step lasts 1 s
 
-    def __init__(self, task: str | os.PathLike | WorldConfig = DEFAULT_TASK, poses: str = "recognized",
-                 occluder: bool = True, render_mode: str | None = None, max_steps: int | None = DEFAULT_MAX_STEPS):
-        if poses not in POSE_MODES:
-            raise SimInputError(f"poses must be one of {POSE_MODES}, got {poses!r}")
+    def __init__(self, task: str | os.PathLike | WorldConfig = DEFAULT_TASK,
+                 poses: PoseSource | str = PoseSource.RECOGNIZED, occluder: bool = True,
+                 render_mode: str | None = None, max_steps: int | None = DEFAULT_MAX_STEPS):
+        poses = parse_mode(PoseSource, poses, "poses")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise SimInputError(f"render_mode must be None or one of {self.metadata['render_modes']}, "
                                     f"got {render_mode!r}")

@@ -1,8 +1,8 @@
 """Pick-and-place episodes: look, decide, pick, until every part has had its pick or the robot gives up.
 
 Each round the robot looks at the cell (:class:`sim.skills.perception.Perception`): with ``poses=
-"recognized"`` it renders the Kinect and runs PSORR; with ``"oracle"`` it takes the simulator's
-true poses (and, with the human about, only checks whether someone is reaching in). Then:
+PoseSource.RECOGNIZED`` it renders the Kinect and runs PSORR; with ``PoseSource.ORACLE`` it takes the
+simulator's true poses (and, with the human about, only checks whether someone is reaching in). Then:
 
 - someone is reaching over the table: wait and look again;
 - no remaining part was returned with a score of at least ``MIN_SCORE`` (hidden, or the
@@ -26,6 +26,7 @@ import numpy as np
 
 from sim.control.cell import ArmCell, Recorder
 from sim.errors import SimInputError, WorkspaceBlockedError
+from sim.modes import PoseSource, parse_mode
 from sim.people.human import ReachingHuman
 from sim.skills.perception import MONITOR_OCCUPIED, Estimate, Look, Perception
 from sim.skills.pick import PickResult, fixture_error, pick_and_place, pose_error, resting_on_table
@@ -38,7 +39,6 @@ MAX_BLIND_LOOKS = 5  # looks in a row with nothing pickable before the rest of t
 WAIT_S = 0.5  # s waited before looking again
 THINK_S = 0.5  # s of simulated time a look (render and recognition) takes
 MAX_EPISODE_S = 240.0  # s of simulated time after which the remaining parts are given up
-POSE_MODES = ("oracle", "recognized")
 
 
 @dataclass(frozen=True)
@@ -71,7 +71,8 @@ class Episode:
     Args:
         world: the cell; it is reset to home here and stepped in place.
         rng: the only randomness (the human's reaches, then the sensor noise).
-        poses: ``"recognized"`` (PSORR on the Kinect's cloud) or ``"oracle"`` (true poses).
+        poses: a :class:`~sim.modes.PoseSource` or its string, ``"recognized"`` (PSORR on the Kinect's
+            cloud) or ``"oracle"`` (true poses).
         occluder: the human reaches over the table on a seeded timeline; the robot watches for it.
         recorder: gets every physics step and each look (see :mod:`sim.recording.recorder`), or None.
         rgb: looks also render the colour image; default: only when there is a recorder to show it.
@@ -79,10 +80,9 @@ class Episode:
     Call :meth:`close` when done (or use it as a context manager): it frees the renderers.
     """
 
-    def __init__(self, world: World, rng: np.random.Generator, poses: str = "recognized", occluder: bool = False,
-                 recorder: Recorder | None = None, rgb: bool | None = None):
-        if poses not in POSE_MODES:
-            raise SimInputError(f"poses must be one of {POSE_MODES}, got {poses!r}")
+    def __init__(self, world: World, rng: np.random.Generator, poses: PoseSource | str = PoseSource.RECOGNIZED,
+                 occluder: bool = False, recorder: Recorder | None = None, rgb: bool | None = None):
+        poses = parse_mode(PoseSource, poses, "poses")
         if occluder and not world.occluder_geoms:
             raise SimInputError("occluder=True needs a world built with WorldConfig(occluder=True)")
         self.world, self.rng, self.poses, self.recorder = world, rng, poses, recorder
@@ -93,9 +93,9 @@ class Episode:
             human = ReachingHuman(rng, world.config.table_size, world.table_top, targets=targets,
                                   eye=world.T_world_camera[:3, 3])
         self.human = human
-        needs_eyes = poses == "recognized" or occluder
+        recognizing = poses is PoseSource.RECOGNIZED
         rgb = recorder is not None if rgb is None else rgb
-        self.perception = Perception(world, rng, recognize=poses == "recognized", rgb=rgb) if needs_eyes else None
+        self.perception = Perception(world, rng, recognize=recognizing, rgb=rgb) if recognizing or occluder else None
         self.cell = ArmCell(world, human=human, monitor=self.perception if occluder else None, recorder=recorder)
         self.remaining = list(world.workpieces)
         self.picks: list[PickResult] = []
@@ -112,7 +112,7 @@ class Episode:
         self.cell.clear_the_view()
         data = self.world.data
         mujoco.mj_forward(self.world.model, data)
-        if self.poses == "recognized":
+        if self.poses is PoseSource.RECOGNIZED:
             look = self.perception.look(data, self.cell.holding)
         else:
             watched = self.cell.monitor is not None
@@ -146,7 +146,7 @@ class Episode:
         if part not in self.remaining:
             raise SimInputError(f"{part!r} is not waiting to be picked; remaining: {self.remaining}")
         result = pick_and_place(self.world, part, T_world_part, self.cell, alternatives,
-                                self.perception if self.poses == "recognized" else None)
+                                self.perception if self.poses is PoseSource.RECOGNIZED else None)
         result = replace(result, looks=looks)
         self.remaining.remove(part)
         self.picks.append(result)
@@ -214,8 +214,8 @@ def _not_picked(part: str, why: str) -> PickResult:
     return PickResult(part, "", False, 0.0, False, math.nan, math.nan, math.nan, math.nan, why, 0)
 
 
-def run_episode(world: World, rng: np.random.Generator, poses: str = "oracle", occluder: bool = False,
-                recorder: Recorder | None = None) -> EpisodeResult:
+def run_episode(world: World, rng: np.random.Generator, poses: PoseSource | str = PoseSource.ORACLE,
+                occluder: bool = False, recorder: Recorder | None = None) -> EpisodeResult:
     """Reset the world to home and run the scripted policy (:class:`Episode`) to the end."""
     with Episode(world, rng, poses, occluder, recorder) as episode:
         return episode.run()

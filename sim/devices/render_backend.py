@@ -20,11 +20,18 @@ import importlib
 import os
 import subprocess
 import sys
+from enum import StrEnum
 
 from sim.errors import RenderBackendError
+from sim.modes import choices
 
-BACKENDS = ("egl", "osmesa")
-"""Headless backends, in the order they are tried."""
+
+class HeadlessBackend(StrEnum):
+    """MuJoCo's headless OpenGL backends, in the order they are tried (the values of ``MUJOCO_GL``)."""
+
+    EGL = "egl"
+    OSMESA = "osmesa"
+
 
 _PROBE = """
 import mujoco
@@ -36,7 +43,7 @@ mujoco.MjrContext(model, mujoco.mjtFontScale.mjFONTSCALE_150)
 ctx.free()
 """
 
-_chosen: str | None = None
+_chosen: HeadlessBackend | str | None = None
 
 
 def _egl_works(timeout: float = 60.0) -> bool:
@@ -51,8 +58,9 @@ def _egl_works(timeout: float = 60.0) -> bool:
     return done.returncode == 0
 
 
-def ensure_headless_gl() -> str:
-    """Make MuJoCo render offscreen without a display; return the backend in use ("egl", "osmesa" or the user's).
+def ensure_headless_gl() -> HeadlessBackend | str:
+    """Make MuJoCo render offscreen without a display; return the backend in use: a :class:`HeadlessBackend`,
+    or the user's own ``MUJOCO_GL`` (such as "glfw") as given.
 
     Idempotent and cheap after the first call. Must run before the first ``mujoco.Renderer`` (or
     ``mujoco.GLContext``) of the process; importing ``mujoco`` before it is fine.
@@ -67,28 +75,30 @@ def ensure_headless_gl() -> str:
     backend = os.environ.get("MUJOCO_GL", "").strip().lower()
     if not backend:
         platform = os.environ.get("PYOPENGL_PLATFORM", "").strip().lower()
-        backend = platform if platform in BACKENDS else "egl" if _egl_works() else "osmesa"
-        os.environ["MUJOCO_GL"] = backend
-    if backend in BACKENDS:
-        platform = os.environ.setdefault("PYOPENGL_PLATFORM", backend)
+        headless = choices(HeadlessBackend)
+        backend = platform if platform in headless else HeadlessBackend.EGL if _egl_works() else HeadlessBackend.OSMESA
+        os.environ["MUJOCO_GL"] = str(backend)
+    if backend in choices(HeadlessBackend):
+        backend = HeadlessBackend(backend)
+        platform = os.environ.setdefault("PYOPENGL_PLATFORM", backend.value)
         if platform.lower() != backend:
             raise RenderBackendError(
-                f"PYOPENGL_PLATFORM={platform!r} does not match MUJOCO_GL={backend!r}; unset it or set it to "
-                f"one of {BACKENDS} to match"
+                f"PYOPENGL_PLATFORM={platform!r} does not match MUJOCO_GL={backend.value!r}; unset it or set it to "
+                f"one of {choices(HeadlessBackend)} to match"
             )
         opengl = sys.modules.get("OpenGL.platform")
         loaded = getattr(opengl, "PLATFORM", None)
         if loaded is not None and backend not in type(loaded).__module__.lower():
             raise RenderBackendError(
                 f"PyOpenGL was already loaded for {type(loaded).__name__}; call ensure_headless_gl() (or set "
-                f"MUJOCO_GL to one of {BACKENDS}) before anything imports OpenGL"
+                f"MUJOCO_GL to one of {choices(HeadlessBackend)}) before anything imports OpenGL"
             )
         _bind_mujoco_context(backend)
     _chosen = backend
     return backend
 
 
-def _bind_mujoco_context(backend: str) -> None:
+def _bind_mujoco_context(backend: HeadlessBackend) -> None:
     """Point an already imported mujoco at the backend's GLContext (mujoco binds it at import time)."""
     gl_context = sys.modules.get("mujoco.rendering.classic.gl_context")
     try:
@@ -96,7 +106,7 @@ def _bind_mujoco_context(backend: str) -> None:
     except (ImportError, AttributeError, OSError) as exc:
         raise RenderBackendError(
             f"cannot load MuJoCo's {backend} backend ({type(exc).__name__}: {exc}); install libegl1 for egl or "
-            f"libosmesa6 for osmesa (make system-libs), or set MUJOCO_GL to one of {BACKENDS}"
+            f"libosmesa6 for osmesa (make system-libs), or set MUJOCO_GL to one of {choices(HeadlessBackend)}"
         ) from None
     if gl_context is not None:
         gl_context.GLContext = context_class
