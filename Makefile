@@ -9,7 +9,7 @@ BENCH_STAMP := $(VENV)/.bench-installed
 # needs EGL (GPU-less Mesa) with OSMesa as the fallback.
 SYSTEM_LIBS := libusb-1.0-0 libgomp1 libegl1 libgl1 libegl-mesa0 libgl1-mesa-dri libosmesa6
 
-.PHONY: setup system-libs test demo bench lint clean
+.PHONY: setup system-libs test docs demo bench lint clean
 
 setup: $(STAMP)
 
@@ -29,8 +29,14 @@ $(STAMP): pyproject.toml | system-libs
 	$(BIN)/pip install -q -e ".[dev]"
 	touch $(STAMP)
 
-test: setup
+# The documentation site first (cheap, and a broken link or docstring fails it), then the tests.
+test: setup docs
 	$(BIN)/python -m pytest -q
+
+# mkdocs.yml; the benchmark tables come from benchmarks/results/*.json (docs/hooks/results.py). Writes site/.
+# NO_MKDOCS_2_WARNING silences mkdocs-material's banner about MkDocs 2, which is no warning about this site.
+docs: setup
+	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict
 
 demo: setup
 	$(BIN)/python -m psorr.demo
