@@ -100,7 +100,7 @@ def report(rows, out_dir: Path) -> int:
     lines += ["", "targets: " + ", ".join(f"{k} {'met' if v else 'MISSED'}" for k, v in met.items())]
     print("\n" + "\n".join(lines[2:]))
     out_dir.mkdir(parents=True, exist_ok=True)
-    # Written down, as every other benchmark's, so the README's numbers can be checked against a file.
+    # Written down, as every other benchmark's: the docs' tables are made from the file (docs/hooks/results.py).
     (out_dir / "decompose_osd.md").write_text("\n".join(lines) + "\n")
     keys = ("scene", "points", "ms", "prims", "cov", "pur", "peer_ms", "peer_prims", "peer_cov", "peer_pur")
     scenes = [{k: (float(r[k]) if isinstance(r[k], (float, np.floating)) else r[k]) for k in keys} for r in rows]

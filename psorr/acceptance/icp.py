@@ -32,7 +32,7 @@ DAMPED_POINTS = 1000  # ... with about this many of its source points: six unkno
 # its true pose to 5-21 mm off, and the check then rejected it. Above this share they are left out of the
 # coarse ICP. Over 72 clutter images, leaving them out of every coarse ICP found 4 parts more and 2 false
 # detections more (brackets converged onto other parts' walls; 7 more when left out of the fine ICP too);
-# above this share, 3 parts more and no false detection more (README, "Recognition: where it stands").
+# above this share, 3 parts more and no false detection more (docs/decisions/0029-icp-hole-share.md).
 HOLE_SHARE = 0.3
 
 

@@ -32,9 +32,8 @@ class AcceptParams:
     max_violation_ratio: float = 0.15
     min_support: int = 60
     # The table explains the rest as well: a circuit board lying flat is supported by the table wherever
-    # it is posed on it; ORR placed 7 on the far table of 45 real clouds (README, "Real clouds that hold
-    # none of our parts"). True detections in heavy clutter kept 63 or more. 0 turns this off, for a part
-    # so thin (a bare plate) that nothing of it stands higher than the tolerance.
+    # it is posed on it. 0 turns this off, for a part so thin (a bare plate) that nothing of it stands
+    # higher than the tolerance. Measured: docs/decisions/0024-support-above-table.md.
     min_support_above_table: int = 30
     max_float: float | None = 0.02  # None: parts piled on one another
     max_shared_pixels: float = 0.3

@@ -92,7 +92,9 @@ def alpha_expansion(costs, edge_i, edge_j, weights, initial, rng, max_passes: in
     Args:
         costs: (N, L) data costs; np.inf forbids a label at a point. `initial`
             must have finite cost everywhere.
-        edge_i, edge_j, weights: (E,) the undirected neighbour graph and its Potts weights.
+        edge_i: (E,) first point of each undirected neighbour pair.
+        edge_j: (E,) second point of each pair.
+        weights: (E,) the pairs' Potts weights.
         initial: (N,) starting labels.
         rng: visits labels in a random order each pass.
         tolerance: stop once a pass lowers the energy by less than this fraction.

@@ -27,8 +27,12 @@ class ReachingHuman:
 
     Args:
         rng: the person's only randomness.
-        table_size, table_top, targets, eye: as for :meth:`ReachSchedule.sample`.
-        first_s, gap_s: (min, max) seconds.
+        table_size: as for :meth:`ReachSchedule.sample`.
+        table_top: as for :meth:`ReachSchedule.sample`.
+        targets: as for :meth:`ReachSchedule.sample`.
+        eye: as for :meth:`ReachSchedule.sample`.
+        first_s: (min, max) seconds before the first reach.
+        gap_s: (min, max) seconds between reaches.
         keep_away: metres between the hand at its peak and the arm's footprint.
     """
 

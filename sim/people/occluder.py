@@ -124,7 +124,11 @@ class ReachSchedule:
                 of them, preferring those the hand can reach; None draws a point on the table's +x half.
             eye: optional (3,) camera position; the hand then goes on the camera's line of sight to the
                 target, so it hides the target in the image.
-            start_s, reach_s, pause_s, withdraw_s, hand_height: (min, max) ranges, seconds / metres.
+            start_s: (min, max) seconds before the reach starts.
+            reach_s: (min, max) seconds the reach takes.
+            pause_s: (min, max) seconds the hand stays at the target.
+            withdraw_s: (min, max) seconds the withdrawal takes.
+            hand_height: (min, max) metres of the hand over the table at the target.
         """
         if not isinstance(rng, np.random.Generator):
             raise SimInputError("ReachSchedule.sample needs rng, a numpy.random.Generator")
