@@ -23,7 +23,7 @@ system-libs:
 	  DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq --no-install-recommends $$missing; \
 	fi
 
-$(STAMP): pyproject.toml | system-libs
+$(STAMP): pyproject.toml setup.py | system-libs
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install -q --upgrade pip
 	$(BIN)/pip install -q -e ".[dev]"
@@ -43,7 +43,7 @@ demo: setup
 	$(BIN)/psorr-sim run tasks/demo.yaml --episodes 2 --seed 0 --occluder on --record out/demo
 
 # The benchmarks compare with peers in one run: the bench extra brings OpenCV's PPF and numba.
-$(BENCH_STAMP): pyproject.toml | $(STAMP)
+$(BENCH_STAMP): pyproject.toml setup.py | $(STAMP)
 	$(BIN)/pip install -q -e ".[bench]"
 	touch $(BENCH_STAMP)
 
