@@ -43,7 +43,8 @@ from tqdm import tqdm
 from psorr.errors import PsorrError
 from psorr.synthetic.catalog import load_catalog
 from sim.skills.grasps import grasp_named
-from sim.skills.pick import PLACE_TOL_DEG, PLACE_TOL_MM, pick_and_place
+from sim.skills.judging import PLACE_TOL_DEG, PLACE_TOL_MM
+from sim.skills.pick import pick_and_place
 from sim.world import WorldConfig, build_world
 
 ROOT = Path(__file__).resolve().parents[1]

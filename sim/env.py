@@ -51,8 +51,8 @@ from sim.episode import MAX_EPISODE_S, MIN_SCORE, Episode
 from sim.errors import ResetNeededError, SimInputError, WorkspaceBlockedError
 from sim.modes import PoseSource, parse_mode
 from sim.skills.grasp_planning import upright_equivalent
+from sim.skills.judging import REST_TOL, PickResult
 from sim.skills.perception import Estimate, Look
-from sim.skills.pick import REST_TOL, PickResult
 from sim.world import World, WorldConfig, build_world
 from sim.world.assets import REPO_ROOT
 

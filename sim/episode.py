@@ -28,8 +28,9 @@ from sim.control.cell import ArmCell, Recorder
 from sim.errors import SimInputError, WorkspaceBlockedError
 from sim.modes import PoseSource, parse_mode
 from sim.people.human import ReachingHuman
+from sim.skills.judging import PickResult, fixture_error, pose_error, resting_on_table
 from sim.skills.perception import MONITOR_OCCUPIED, Estimate, Look, Perception
-from sim.skills.pick import PickResult, fixture_error, pick_and_place, pose_error, resting_on_table
+from sim.skills.pick import pick_and_place
 from sim.world import World
 
 __all__ = ["Episode", "EpisodeResult", "PickResult", "fixture_error", "pick_and_place", "pose_error", "run_episode"]

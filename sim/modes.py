@@ -2,8 +2,8 @@
 
 A member compares equal to its string (``PoseSource.ORACLE == "oracle"``), so callers may keep passing
 plain strings: each mode is converted where it enters the sim (:func:`parse_mode`), and an unknown one is
-refused naming the valid choices. Command-line choices are read from the enums. This module imports
-nothing heavy, so the command line can build its parser without loading MuJoCo.
+refused naming the valid choices. Command-line choices are read from the enums. This module loads no
+MuJoCo, so the command line builds its parser without it.
 """
 
 from __future__ import annotations

@@ -5,7 +5,7 @@ Run once from the repository root (a few minutes; needs ``pip install coacd``):
     .venv/bin/python assets/workpieces/build_collision.py [--only NAME ...]
 
 Writes assets/workpieces/collision/<name>_<k>.stl (binary STL, metres, the part's model frame)
-and collision/index.json: per part its files, the SHA-256 of the source mesh (sim/world.py
+and collision/index.json: per part its files, the SHA-256 of the source mesh (sim/world/assembly.py
 refuses stale parts) and the settings used. MuJoCo takes each file's convex hull as one collision
 geom, so a part keeps its cavities: the script fails if a point that must stay free (the middle
 of the U-channel, the chassis tray, the bores) ends up inside a hull.

@@ -47,17 +47,44 @@ def shift(T: np.ndarray, offset) -> np.ndarray:
     return T
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
+class PlacePlan:
+    """A reachable seat for the held part: the tool pose (4, 4, world) that seats it in its fixture, the
+    joints (nq,) above that at the transport height, and whether the pads fit inside the fixture's pocket
+    there (if not, the part is released above the pocket's walls)."""
+
+    T_place: np.ndarray
+    q_above: np.ndarray
+    pads_clear: bool
+
+
+@dataclass(frozen=True, eq=False)
 class GraspPlan:
-    """A reachable grasp: the tool poses (4, 4, world) at grasp and place, and the joints (nq,) on the way."""
+    """A reachable grasp: the tool pose (4, 4, world) at the grasp, the joints (nq,) at the pre-grasp and at
+    the grasp, and where the part is seated."""
 
     grasp: Grasp
     T_grasp: np.ndarray
-    T_place: np.ndarray
     q_pre: np.ndarray
     q_grasp: np.ndarray
-    q_place_above: np.ndarray
-    pads_clear_fixture: bool  # the pads fit inside the pocket when the part is seated
+    place: PlacePlan
+
+
+@dataclass(frozen=True)
+class NoGrasp:
+    """Why no grasp of a part could be planned: a reason per grasp tried, "; "-joined."""
+
+    why: str
+
+
+@dataclass(frozen=True, eq=False)
+class SeatOption:
+    """One way to seat a held part: the tool pose (4, 4, world) in the fixture, whether the pads clear the
+    fixture's walls there, and the wrist's turn (deg) from the grasp (the less, the better)."""
+
+    T_place: np.ndarray
+    pads_clear: bool
+    turn_deg: float
 
 
 def pads_clear_fixture(cell: ArmCell, info, T_fix_tool: np.ndarray, width: float) -> bool:
@@ -77,7 +104,7 @@ def pads_clear_fixture(cell: ArmCell, info, T_fix_tool: np.ndarray, width: float
     return True
 
 
-def plan_grasp(cell: ArmCell, part: str, T_est: np.ndarray) -> tuple[GraspPlan | None, str]:
+def plan_grasp(cell: ArmCell, part: str, T_est: np.ndarray) -> GraspPlan | NoGrasp:
     """The first reachable grasp, in catalog order, preferring those whose pads fit the fixture's pocket."""
     world = cell.world
     info = world.catalog[part]
@@ -109,10 +136,11 @@ def plan_grasp(cell: ArmCell, part: str, T_est: np.ndarray) -> tuple[GraspPlan |
                     break
                 T_grasp = shift(T_grasp, [0, 0, short])
             T_part_tool = np.linalg.inv(T_est) @ T_grasp
-            for T_place, clears, turn in place_poses(cell, info, T_fix, T_part_tool, grasp.width, T_grasp):
-                candidates.append(((not clears, index, turn), grasp, flip, T_grasp, T_place, clears))
+            for seat in seat_options(cell, info, T_fix, T_part_tool, grasp.width, T_grasp):
+                candidates.append(((not seat.pads_clear, index, seat.turn_deg), grasp, flip, T_grasp, seat))
     candidates.sort(key=lambda c: c[0])
-    for _, grasp, flip, T_grasp, T_place, clears in candidates:
+    for _, grasp, flip, T_grasp, seat in candidates:
+        T_place = seat.T_place
         try:
             q_pre = cell.solve(q0, shift(T_grasp, PRE_GRASP * -T_grasp[:3, 2]))
             q_grasp = cell.solve(q_pre, T_grasp)
@@ -126,12 +154,12 @@ def plan_grasp(cell: ArmCell, part: str, T_est: np.ndarray) -> tuple[GraspPlan |
         if problem:
             reasons.append(f"{grasp.name}{' flipped' if flip else ''}: {problem}")
             continue
-        return GraspPlan(grasp, T_grasp, T_place, q_pre, q_grasp, q_above, clears), ""
-    return None, "; ".join(reasons) or "the part has no grasps"
+        return GraspPlan(grasp, T_grasp, q_pre, q_grasp, PlacePlan(T_place, q_above, seat.pads_clear))
+    return NoGrasp("; ".join(reasons) or "the part has no grasps")
 
 
-def place_poses(cell: ArmCell, info, T_fix: np.ndarray, T_part_tool: np.ndarray, width: float,
-                T_grasp: np.ndarray) -> list[tuple[np.ndarray, bool, float]]:
+def seat_options(cell: ArmCell, info, T_fix: np.ndarray, T_part_tool: np.ndarray, width: float,
+                 T_grasp: np.ndarray) -> list[SeatOption]:
     """The tool poses (4, 4, world) that seat a part held at ``T_part_tool`` (the tool in the part's frame)
     in its fixture ``T_fix``, one per symmetry of the part whose tool approach points down; each with
     whether the pads clear the fixture's walls, and the wrist's turn (deg) from ``T_grasp``."""
@@ -141,19 +169,20 @@ def place_poses(cell: ArmCell, info, T_fix: np.ndarray, T_part_tool: np.ndarray,
         if T_place[2, 2] > -0.7:
             continue
         clears = pads_clear_fixture(cell, info, S @ T_part_tool, width)
-        out.append((T_place, clears, angle_deg(T_grasp[:3, :3].T @ T_place[:3, :3])))  # prefer the wrist turning least
+        out.append(SeatOption(T_place, clears, angle_deg(T_grasp[:3, :3].T @ T_place[:3, :3])))
     return out
 
 
 def replan_place(cell: ArmCell, part: str, grasp: Grasp, T_part_tool: np.ndarray, q_start: np.ndarray,
-                 T_grasp: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool] | None:
-    """For a part found, once in the hand, to be held at ``T_part_tool`` rather than as planned: the
-    place pose (4, 4), the joints (nq,) above it at the transport height (from ``q_start``), and whether
-    the pads clear the fixture; None if no seat is reachable."""
+                 T_grasp: np.ndarray) -> PlacePlan | None:
+    """For a part found, once in the hand, to be held at ``T_part_tool`` rather than as planned: the seat
+    that clears the fixture's walls and turns the wrist least among the reachable ones (the joints above
+    it solved from ``q_start``); None if no seat is reachable."""
     world = cell.world
     info = world.catalog[part]
-    options = place_poses(cell, info, world.T_world_fixtures[part], T_part_tool, grasp.width, T_grasp)
-    for T_place, clears, _ in sorted(options, key=lambda o: (not o[1], o[2])):
+    options = seat_options(cell, info, world.T_world_fixtures[part], T_part_tool, grasp.width, T_grasp)
+    for seat in sorted(options, key=lambda o: (not o.pads_clear, o.turn_deg)):
+        T_place = seat.T_place
         try:
             T_above = shift(T_place, [0, 0, T_grasp[2, 3] + LIFT - T_place[2, 3]])
             q_above = cell.solve(q_start, T_above)
@@ -161,7 +190,7 @@ def replan_place(cell: ArmCell, part: str, grasp: Grasp, T_part_tool: np.ndarray
         except UnreachableTargetError:
             continue
         if not (configuration_problem(cell, q_above) or configuration_problem(cell, q_place)):
-            return T_place, q_above, clears
+            return PlacePlan(T_place, q_above, seat.pads_clear)
     return None
 
 

@@ -3,7 +3,10 @@
 import numpy as np
 import pytest
 
+import sim.skills.pick
 from psorr.errors import InvalidInputError
+from sim.control.cell import ArmCell
+from sim.errors import UnreachableTargetError
 from sim.skills.pick import pick_and_place
 from sim.world import WorldConfig, build_world
 
@@ -31,3 +34,20 @@ def test_pick_and_place_rejects_an_unknown_part():
     world = world_for()
     with pytest.raises(InvalidInputError, match="unknown part"):
         pick_and_place(world, "bushing", np.eye(4))
+
+
+def test_a_step_that_cannot_go_on_ends_the_pick_open_handed_saying_why(monkeypatch):
+    """The seat turns out unreachable once the part is carried above it: the pick reports the abort with
+    the lift it made, and the gripper lets go of the part."""
+    def unreachable(*args):
+        raise UnreachableTargetError("the seat is out of reach", None)
+
+    world = world_for()
+    world.reset()
+    cell = ArmCell(world)
+    monkeypatch.setattr(sim.skills.pick, "release", unreachable)
+    result = pick_and_place(world, "u_channel", world.body_pose("u_channel"), cell)
+    assert result.note == "aborted mid-pick: the seat is out of reach"
+    assert not result.grasped and not result.placed and result.grasp_name
+    assert result.lifted_m >= 0.05  # measured when it gave up: still held up at the transport height
+    assert cell.holding is None and cell.data.ctrl[cell.gripper] == world.arm.gripper_open
