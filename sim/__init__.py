@@ -1,4 +1,20 @@
-"""The simulated robot cell (MuJoCo). ``gymnasium.make("psorr/PickPlace-v0")`` gives :class:`sim.env.PickPlaceEnv`."""
+"""The simulated robot cell (MuJoCo). ``gymnasium.make("psorr/PickPlace-v0")`` gives :class:`sim.env.PickPlaceEnv`.
+
+The packages follow what drives what, bottom up:
+
+- :mod:`sim.devices`: the simulated Kinect and the headless OpenGL it renders with;
+- :mod:`sim.people`: the person who reaches over the table;
+- :mod:`sim.world`: what a cell is built from (config, task files, the arm's MJCF), where the parts go,
+  and the assembled, settled cell;
+- :mod:`sim.control`: the arm's IK and the stepping of its moves;
+- :mod:`sim.skills`: looking and recognising, the catalog's grasps and their planning, pick and place,
+  the look in the hand, and judging a pick on the simulator's truth;
+- :mod:`sim.recording`: the MP4 and contact sheet of an episode.
+
+On top: :mod:`sim.episode` (looking, deciding and picking until done), :mod:`sim.env` (the same,
+one planner decision per step), :mod:`sim.cli` (``psorr-sim``); :mod:`sim.errors` and :mod:`sim.modes`
+are the errors and the string modes every layer shares.
+"""
 
 import gymnasium
 
