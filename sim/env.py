@@ -54,9 +54,8 @@ from sim.skills.grasp_planning import upright_equivalent
 from sim.skills.judging import REST_TOL, PickResult
 from sim.skills.perception import Estimate, Look
 from sim.world import World, WorldConfig, build_world
-from sim.world.assets import REPO_ROOT
 
-DEFAULT_TASK = "tasks/demo.yaml"
+DEFAULT_TASK = WorldConfig()  # the demo cell: tasks/demo.yaml spells out these defaults
 GRASP_REWARD, PLACE_REWARD, WAIT_REWARD, REFUSED_REWARD = 1.0, 1.0, -0.01, -0.1
 DEFAULT_MAX_STEPS = 100  # actions in an episode: a few dozen suffice for four parts with the person about
 EDGE_MARGIN = 0.1  # m: a symmetric part's upright pose may stand past the table edge by up to its height
@@ -66,8 +65,8 @@ class PickPlaceEnv(gym.Env):
     """Pick-and-place in the simulated cell, one planner decision per step (see the module docstring).
 
     Args:
-        task: a task file (``tasks/*.yaml``; a relative path not found from the working directory is
-            taken from the repository root) or a :class:`sim.world.WorldConfig`.
+        task: a task file (``tasks/*.yaml``; a relative path is taken from the working directory) or a
+            :class:`sim.world.WorldConfig`; by default the demo cell, as ``tasks/demo.yaml`` gives it.
         poses: a :class:`~sim.modes.PoseSource` or its string, ``"recognized"`` (PSORR on the Kinect's
             cloud) or ``"oracle"`` (the simulator's true poses).
         occluder: a person reaches over the table now and then; overrides the config's ``occluder``.
@@ -256,9 +255,6 @@ def _world_config(task) -> WorldConfig:
     if isinstance(task, (str, os.PathLike)):
         from sim.world.tasks import load_task
 
-        path = Path(task)
-        if not path.is_absolute() and not path.is_file() and (REPO_ROOT / path).is_file():
-            path = REPO_ROOT / path
-        return load_task(path).world
-    raise SimInputError(f"task must be a task file path (e.g. {DEFAULT_TASK!r}) or a sim.world.WorldConfig, "
+        return load_task(Path(task)).world
+    raise SimInputError("task must be a task file path (e.g. 'tasks/demo.yaml') or a sim.world.WorldConfig, "
                             f"got {type(task).__name__}")

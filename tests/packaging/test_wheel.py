@@ -128,8 +128,6 @@ def test_psorr_recognize_finds_the_parts_with_the_shipped_meshes(installed):
     assert len(detections) == len(SCENE_PARTS), [d["model"] for d in detections]
 
 
-@pytest.mark.xfail(strict=False, reason="sim still finds arm.xml and the collision meshes from its own __file__ "
-                                        "(sim/world/assets.py); it passes once they come from psorr.assets.asset_path")
 def test_psorr_sim_perceive_runs_the_cell_and_recognises_its_parts(installed):
     out = installed.run(str(installed.bin / "psorr-sim"), "perceive", "--seed", "0", "--json")
     result = json.loads(out.stdout)

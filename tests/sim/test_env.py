@@ -8,6 +8,7 @@ import gymnasium
 import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
+from paths import REPO
 
 import sim
 from psorr.errors import InvalidInputError
@@ -15,6 +16,7 @@ from sim.env import DEFAULT_MAX_STEPS, REFUSED_REWARD, WAIT_REWARD, PickPlaceEnv
 from sim.episode import Episode
 from sim.skills.perception import MONITOR_OCCUPIED, Estimate, Look
 from sim.world import WorldConfig
+from sim.world.tasks import load_task
 
 PARTS = ("u_channel", "chassis")
 CONFIG = WorldConfig(workpieces=PARTS, occluder=False)
@@ -60,11 +62,20 @@ def test_make_and_registration():
     env.close()
 
 
-def test_task_path_is_resolved_from_the_repo_root(tmp_path, monkeypatch):
+def test_the_default_task_is_the_demo_task_file(tmp_path, monkeypatch):
+    # An installed psorr has no tasks/ folder: the env's default is the WorldConfig that tasks/demo.yaml spells out.
+    assert load_task(REPO / "tasks" / "demo.yaml").world == WorldConfig()
     monkeypatch.chdir(tmp_path)
-    env = PickPlaceEnv(task="tasks/demo.yaml")
+    env = PickPlaceEnv()
     assert env.parts == ("u_channel", "chassis", "transformer", "flanged_hub")
     assert env.observation_space["poses"].shape == (4, 7) and env.action_space.n == 5
+
+
+def test_a_relative_task_path_is_taken_from_the_working_directory(tmp_path, monkeypatch):
+    (tmp_path / "tasks").mkdir()
+    (tmp_path / "tasks" / "two.yaml").write_text("workpieces: [bracket, bushing]\n")
+    monkeypatch.chdir(tmp_path)
+    assert PickPlaceEnv(task="tasks/two.yaml").parts == ("bracket", "bushing")
 
 
 @pytest.mark.parametrize("kwargs, names", [
