@@ -16,6 +16,23 @@ from psorr.hypotheses.pose_clusters import share_out
 from psorr.verification.point_check import CheckParams, check_poses
 
 
+class SinglePrimitiveMatcher:
+    """A matcher of single scene primitives to the library's models (``models``): its ``hypotheses(primitives)``
+    give poses (K, 4, 4) and model indices (K,); its ``params`` hold ``check``, ``min_score`` and ``top``."""
+
+    models: list
+    params: object
+
+    def hypotheses(self, primitives) -> tuple[np.ndarray, np.ndarray]:
+        raise NotImplementedError
+
+    def candidates(self, view, primitives) -> CandidateSet:
+        """The poses of :meth:`hypotheses`, ranked by the coarse point check in ``view`` (a SceneView)."""
+        p = self.params
+        poses, owners = self.hypotheses(primitives)
+        return ranked_by_point_check(view, self.models, poses, owners, p.check, p.min_score, p.top)
+
+
 def ranked_by_point_check(view, models, poses: np.ndarray, owners: np.ndarray, check: CheckParams,
                           min_score: float, top: int) -> CandidateSet:
     """The ``top`` of ``poses`` (K, 4, 4) ``T_cloud_model`` of ``models`` (the library's, indexed by ``owners``

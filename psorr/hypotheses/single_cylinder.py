@@ -27,8 +27,7 @@ import numpy as np
 from psorr.checks import params as check
 from psorr.errors import InvalidInputError
 from psorr.geometry.boxes import orthonormal_frame
-from psorr.hypotheses.candidates import CandidateSet
-from psorr.hypotheses.point_ranking import ranked_by_point_check
+from psorr.hypotheses.point_ranking import SinglePrimitiveMatcher
 from psorr.hypotheses.primitive_match import RADIUS_TOLERANCE
 from psorr.types import Primitive, PrimitiveKind
 from psorr.verification.point_check import CheckParams, check_pose
@@ -116,7 +115,7 @@ def _near_cylinder(points: np.ndarray, cylinder: Primitive, length: float, margi
     return (across <= cylinder.radius + margin) & (along <= length / 2 + margin)
 
 
-class SingleCylinderMatcher:
+class SingleCylinderMatcher(SinglePrimitiveMatcher):
     """The library's model cylinders of at least ``min_area`` side view, ready to be matched to scene ones."""
 
     def __init__(self, models, params: SingleCylinderParams | None = None):
@@ -135,12 +134,6 @@ class SingleCylinderMatcher:
                     near |= _near_cylinder(model.points, p, length)
             if near.any():
                 self.beyond[index] = (model.points[~near], model.normals[~near])
-
-    def candidates(self, view, scene_cylinders: list[Primitive]) -> CandidateSet:
-        """The poses of :meth:`hypotheses`, ranked by the coarse point check in ``view`` (a SceneView)."""
-        p = self.params
-        poses, owners = self.hypotheses(scene_cylinders)
-        return ranked_by_point_check(view, self.models, poses, owners, p.check, p.min_score, p.top)
 
     def hypotheses(self, scene_cylinders: list[Primitive]) -> tuple[np.ndarray, np.ndarray]:
         """Poses (K, 4, 4) ``T_cloud_model`` and model indices (K,) from scene cylinders matched by size."""

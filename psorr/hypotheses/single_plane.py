@@ -23,8 +23,7 @@ import numpy as np
 from psorr.checks import params as check
 from psorr.errors import InvalidInputError
 from psorr.geometry.boxes import orthonormal_frame
-from psorr.hypotheses.candidates import CandidateSet
-from psorr.hypotheses.point_ranking import ranked_by_point_check
+from psorr.hypotheses.point_ranking import SinglePrimitiveMatcher
 from psorr.types import Primitive, PrimitiveKind
 from psorr.verification.point_check import CheckParams
 
@@ -95,7 +94,7 @@ def plane_frames(plane: Primitive, quarter_turns: bool) -> np.ndarray:
     return frames
 
 
-class SinglePlaneMatcher:
+class SinglePlaneMatcher(SinglePrimitiveMatcher):
     """The library's model faces of at least ``min_area``, ready to be matched to scene faces."""
 
     def __init__(self, models, params: SinglePlaneParams | None = None):
@@ -107,12 +106,6 @@ class SinglePlaneMatcher:
                 sides = in_plane_sides(p) if p.kind is PrimitiveKind.PLANE else np.zeros(2)
                 if sides[0] * sides[1] >= params.min_area:
                     self.faces.append((index, sides, np.linalg.inv(plane_frames(p, False)[0])))
-
-    def candidates(self, view, scene_planes: list[Primitive]) -> CandidateSet:
-        """The poses of :meth:`hypotheses`, ranked by the coarse point check in ``view`` (a SceneView)."""
-        p = self.params
-        poses, owners = self.hypotheses(scene_planes)
-        return ranked_by_point_check(view, self.models, poses, owners, p.check, p.min_score, p.top)
 
     def hypotheses(self, scene_planes: list[Primitive]) -> tuple[np.ndarray, np.ndarray]:
         """Poses (K, 4, 4) ``T_cloud_model`` and model indices (K,) from scene faces matched by size."""
