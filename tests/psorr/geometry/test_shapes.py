@@ -89,3 +89,33 @@ def test_segmentation_scores_by_hand():
     # Object 2: primitive 1 (majority 2, 3 of 4 points) covers 3/4; object 3: 2/2.
     assert scores.coverage == pytest.approx((0.75 + 1.0) / 2)
     assert scores.purity == pytest.approx((3 + 2) / (4 + 2))
+
+
+def test_the_cylinder_fit_jacobian_is_the_residuals_derivative():
+    # refine_cylinder's least squares takes its Jacobian from _CylinderFit.jacobian: check it against
+    # central differences at a start off the truth, on a noisy arc.
+    rng = np.random.default_rng(5)
+    axis = np.array([0.2, 0.1, 1.0]) / np.linalg.norm([0.2, 0.1, 1.0])
+    u, v = shapes.orthonormal_frame(axis)
+    t, h = rng.uniform(0, 1.5, 500), rng.uniform(-0.05, 0.05, 500)
+    points = (np.array([0.1, 0.0, 0.8]) + 0.03 * (np.cos(t)[:, None] * u + np.sin(t)[:, None] * v)
+              + h[:, None] * axis + rng.normal(0, 0.001, (500, 3)))
+    fit = shapes._CylinderFit(points, np.array([0.102, 0.001, 0.8, 0.18, 0.1, 0.98, 0.028]))
+    x = np.array([0.01, -0.02, 0.003, -0.001, 0.029])
+    step = 1e-7
+    numeric = np.column_stack([(fit.residuals(x + step * e) - fit.residuals(x - step * e)) / (2 * step)
+                               for e in np.eye(5)])
+    assert np.allclose(fit.jacobian(x), numeric, atol=1e-6)
+
+
+def test_refining_a_cylinder_removes_the_bias_of_a_short_noisy_arc():
+    rng = np.random.default_rng(6)
+    axis = np.array([0.0, 0.3, 1.0]) / np.linalg.norm([0.0, 0.3, 1.0])
+    u, v = shapes.orthonormal_frame(axis)
+    t, h = rng.uniform(0, 1.2, 3000), rng.uniform(-0.04, 0.04, 3000)
+    radial = np.cos(t)[:, None] * u + np.sin(t)[:, None] * v
+    points = np.array([0.0, 0.1, 0.9]) + 0.025 * radial + h[:, None] * axis + rng.normal(0, 0.0015, (3000, 3))
+    rough = shapes.fit_cylinder(points, radial)
+    refined = shapes.refine_cylinder(points, rough)
+    assert abs(refined[6] - 0.025) < abs(rough[6] - 0.025) and abs(refined[6] - 0.025) < 0.001
+    assert abs(np.dot(refined[3:6], axis)) > 0.999
