@@ -21,8 +21,7 @@ axis but not across it. The second table gives, per part, the largest level at w
 smaller level) still succeeded in >= 90% of trials: the recognizer's pose error has to stay below that.
 
     python benchmarks/grasp_tolerance.py [--quick] [--parts chassis bushing] [--seed 0]
-
-Writes benchmarks/results/grasp_tolerance.{md,json,png} (grasp_tolerance.quick.* with --quick).
+writes benchmarks/results/grasp_tolerance.{md,json,png} (grasp_tolerance.quick.* with --quick).
 """
 
 from __future__ import annotations
