@@ -1,0 +1,157 @@
+"""How a part rests on a table, and room for several on one table without overlap.
+
+:func:`stable_rests` lists the poses a dropped part comes to rest in, with their probabilities
+(``trimesh.poses.compute_stable_poses``, which needs networkx). Each rest's footprint is the convex
+hull of the part's outline seen from above; :func:`place_footprints` lays footprints out in a patch
+of the table with a clearance between every two (the separating-axis test of convex polygons).
+"""
+
+from __future__ import annotations
+
+import hashlib
+from dataclasses import dataclass
+
+import numpy as np
+import trimesh
+from scipy.spatial import ConvexHull, QhullError
+
+from psorr.errors import InvalidInputError, PsorrError
+
+
+@dataclass(frozen=True, eq=False)
+class Rest:
+    """One stable resting pose of a part.
+
+    Attributes:
+        T_table_model: (4, 4) model -> table frame: the part touches the plane z = 0 from above, and its
+            footprint's centroid is at x = y = 0.
+        probability: the chance that a dropped part comes to rest so (the rests of a part sum to 1).
+        footprint: (K, 2) the convex outline seen from above, counter-clockwise, table frame.
+        height: the part's height above the table as it rests, in the mesh's unit.
+    """
+
+    T_table_model: np.ndarray
+    probability: float
+    footprint: np.ndarray
+    height: float
+
+
+_RESTS: dict[str, tuple[Rest, ...]] = {}
+
+
+def _mesh_key(mesh: trimesh.Trimesh) -> str:
+    return hashlib.sha1(np.ascontiguousarray(mesh.vertices).tobytes() + np.ascontiguousarray(mesh.faces).tobytes()
+                        ).hexdigest()
+
+
+def _centre_of_mass(mesh: trimesh.Trimesh) -> np.ndarray:
+    """The solid's centre of mass; for a mesh that is not closed (6 of the Prusa parts as exported), its
+    convex hull's, since the volume integral of an open surface means nothing."""
+    return np.asarray(mesh.center_mass if mesh.is_watertight else mesh.convex_hull.center_mass)
+
+
+def _outline(points: np.ndarray) -> np.ndarray:
+    """(K, 2) counter-clockwise convex hull of the (N, 2) points (a degenerate outline: its extreme points)."""
+    try:
+        return points[ConvexHull(points).vertices]
+    except QhullError:
+        return points[ConvexHull(points, qhull_options="QJ").vertices]
+
+
+def _rest(T: np.ndarray, probability: float, mesh: trimesh.Trimesh) -> Rest:
+    on_table = mesh.vertices @ T[:3, :3].T + T[:3, 3]
+    outline = _outline(on_table[:, :2])
+    centre = outline.mean(axis=0)
+    T = T.copy()
+    T[:2, 3] -= centre
+    T[2, 3] -= on_table[:, 2].min()  # touching exactly
+    return Rest(T, float(probability), outline - centre, float(np.ptp(on_table[:, 2])))
+
+
+def stable_rests(mesh: trimesh.Trimesh) -> tuple[Rest, ...]:
+    """The stable resting poses of ``mesh`` (any unit), most probable first; computed once per mesh.
+
+    Raises:
+        PsorrError: networkx, which trimesh's stable poses need, is not installed (pip install networkx).
+    """
+    key = _mesh_key(mesh)
+    if key not in _RESTS:
+        try:
+            import networkx  # noqa: F401  (trimesh imports it softly and fails late without it)
+        except ImportError as exc:
+            raise PsorrError("resting poses need networkx (trimesh.poses.compute_stable_poses): "
+                             "pip install networkx") from exc
+        with np.errstate(invalid="ignore"):  # trimesh takes square roots of rounding-negative numbers
+            transforms, probabilities = trimesh.poses.compute_stable_poses(mesh, center_mass=_centre_of_mass(mesh))
+        if len(probabilities) == 0:
+            raise InvalidInputError("trimesh found no stable resting pose for the mesh; is it a closed solid?")
+        probabilities = np.asarray(probabilities) / np.sum(probabilities)
+        _RESTS[key] = tuple(_rest(T, p, mesh) for T, p in zip(transforms, probabilities))
+    return _RESTS[key]
+
+
+def draw_rest(rng: np.random.Generator, rests: tuple[Rest, ...]) -> Rest:
+    """One of ``rests``, drawn by its probability."""
+    return rests[int(rng.choice(len(rests), p=[r.probability for r in rests]))]
+
+
+def _separated(a: np.ndarray, b: np.ndarray, gap: float) -> bool:
+    """Are the convex polygons (K, 2) and (L, 2) at least ``gap`` apart along one of their edge normals?"""
+    for polygon in (a, b):
+        edges = np.roll(polygon, -1, axis=0) - polygon
+        normals = np.column_stack((edges[:, 1], -edges[:, 0]))
+        normals /= np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-12)
+        pa, pb = a @ normals.T, b @ normals.T
+        if np.any(np.maximum(pb.min(axis=0) - pa.max(axis=0), pa.min(axis=0) - pb.max(axis=0)) >= gap):
+            return True
+    return False
+
+
+def _posed(footprint: np.ndarray, x: float, y: float, yaw: float) -> np.ndarray:
+    c, s = np.cos(yaw), np.sin(yaw)
+    return footprint @ np.array([[c, s], [-s, c]]) + (x, y)
+
+
+def _try_layout(rng, footprints: list[np.ndarray], half_extents, gap: float, tries: int) -> list | None:
+    """One attempt at place_footprints, in the given order; None when a footprint finds no room."""
+    placed, outlines = [], []
+    for footprint in footprints:
+        for _ in range(tries):
+            yaw = rng.uniform(0.0, 2 * np.pi)
+            turned = _posed(footprint, 0.0, 0.0, yaw)
+            room = np.asarray(half_extents) - np.abs(turned).max(axis=0)
+            if np.any(room < 0):
+                continue
+            x, y = rng.uniform(-room[0], room[0]), rng.uniform(-room[1], room[1])
+            outline = turned + (x, y)
+            if all(_separated(outline, other, gap) for other in outlines):
+                placed.append((x, y, yaw))
+                outlines.append(outline)
+                break
+        else:
+            return None
+    return placed
+
+
+def place_footprints(rng: np.random.Generator, footprints: list[np.ndarray], half_extents: tuple[float, float],
+                     gap: float, tries: int = 200, attempts: int = 20) -> list[tuple[float, float, float]]:
+    """(x, y, yaw) for each footprint (K, 2), so that every turned and moved footprint lies inside the
+    patch |x| <= half_extents[0], |y| <= half_extents[1] and at least ``gap`` from each other one.
+
+    The largest footprints are placed first; rng draws a yaw, then x and y, for each of up to ``tries``
+    places of a footprint, and a layout in which one finds no room starts again, up to ``attempts``
+    times. Raises InvalidInputError when none succeeds.
+    """
+    order = sorted(range(len(footprints)), key=lambda k: -_area(footprints[k]))
+    for _ in range(attempts):
+        placed = _try_layout(rng, [footprints[k] for k in order], half_extents, gap, tries)
+        if placed is not None:
+            return [placed[order.index(k)] for k in range(len(footprints))]
+    raise InvalidInputError(f"no room for {len(footprints)} objects in a table patch of {2 * half_extents[0]:g} x "
+                            f"{2 * half_extents[1]:g} m in {attempts} attempts: use fewer or smaller objects, or a "
+                            "larger patch (SceneParams.patch_half_extents)")
+
+
+def _area(polygon: np.ndarray) -> float:
+    x, y = polygon[:, 0], polygon[:, 1]
+    return 0.5 * abs(float(x @ np.roll(y, -1) - y @ np.roll(x, -1)))
