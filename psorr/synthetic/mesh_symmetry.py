@@ -183,7 +183,7 @@ def find_symmetries(mesh: trimesh.Trimesh, params: SymmetryParams | None = None)
         turns += [S for n in range(2, p.max_order + 1) if surface.largest(points, S := _about(
             axis, 2 * np.pi / n, centre)) <= limit]
     if continuous is not None:
-        turns = [S for S in turns if abs(S[:3, :3] @ continuous @ continuous) < 1 - 1e-6]  # spins: the axis' own
+        turns = [S for S in turns if S[:3, :3] @ continuous @ continuous < 1 - 1e-6]  # not the spins about it
         return MeshSymmetry(np.array([np.eye(4), *_flips(continuous, _closed_group(turns, limit))]), continuous,
                             centre)
     return MeshSymmetry(np.array(_closed_group(turns, limit)), None, centre)

@@ -165,13 +165,11 @@ def _revolution_share(points: np.ndarray, normals: np.ndarray, point: np.ndarray
     return float(fits.mean()), float((fits & (np.abs(normals @ axis) < np.sqrt(0.5))).mean())
 
 
-def _turning_axis(mesh: trimesh.Trimesh, symmetry: MeshSymmetry, cylinders: list[tuple],
-                  p: ShapeParams) -> tuple[float, float, tuple]:
-    """(revolution share, its side share, (point, direction)) of the continuous symmetry axis if there is
-    one, else of the best of the candidate axes: the principal axes through the area centroid, and the
-    axes of the cylinders."""
-    points, faces = trimesh.sample.sample_surface(mesh, p.samples, seed=0)
-    normals = mesh.face_normals[faces]
+def _turning_axis(mesh: trimesh.Trimesh, points: np.ndarray, normals: np.ndarray, symmetry: MeshSymmetry,
+                  cylinders: list[tuple], p: ShapeParams) -> tuple[float, float, tuple]:
+    """(revolution share, its side share, (point, direction)) of the surface samples (N, 3) with normals
+    (N, 3) about the continuous symmetry axis if there is one, else about the best of the candidate axes:
+    the principal axes through the area centroid, and the axes of the cylinders."""
     if symmetry.axis is not None:
         candidates = [(symmetry.axis_point, symmetry.axis)]
     else:
@@ -180,14 +178,16 @@ def _turning_axis(mesh: trimesh.Trimesh, symmetry: MeshSymmetry, cylinders: list
     return max(scored, key=lambda s: s[0])
 
 
-def _flanged(mesh: trimesh.Trimesh, point: np.ndarray, axis: np.ndarray, p: ShapeParams) -> bool:
-    """Do the slices along the axis wider than flange_ratio x the median slice make up at most flange_length?"""
-    along = (mesh.vertices - point) @ axis
-    radius = np.linalg.norm(np.cross(mesh.vertices - point, axis), axis=1)
+def _flanged(points: np.ndarray, point: np.ndarray, axis: np.ndarray, p: ShapeParams) -> bool:
+    """Do the slices along the axis wider than flange_ratio x the median slice make up at most flange_length?
+    Slices of the surface samples (N, 3); a slice no sample falls in is left out."""
+    along = (points - point) @ axis
+    radius = np.linalg.norm(np.cross(points - point, axis), axis=1)
     edges = np.linspace(along.min(), along.max(), p.slices + 1)
     slot = np.clip(np.searchsorted(edges, along, side="right") - 1, 0, p.slices - 1)
-    widest = np.zeros(p.slices)
+    widest = np.full(p.slices, -1.0)
     np.maximum.at(widest, slot, radius)
+    widest = widest[widest >= 0]
     wide = widest > p.flange_ratio * np.median(widest)
     return bool(wide.any() and wide.mean() <= p.flange_length)
 
@@ -209,10 +209,11 @@ def part_shape(mesh: trimesh.Trimesh, symmetry: MeshSymmetry | None = None,
     min_area = (p.min_region * diameter) ** 2
     planar = _planar_faces(mesh, min_area)
     cylinders = _cylinders(mesh, planar, p, min_area)
-    revolution, side, axis = _turning_axis(mesh, symmetry, cylinders, p)
+    points, faces = trimesh.sample.sample_surface(mesh, p.samples, seed=0)
+    revolution, side, axis = _turning_axis(mesh, points, mesh.face_normals[faces], symmetry, cylinders, p)
     turned = symmetry.axis is not None or (revolution >= p.turned_share and side >= p.turned_side_share)
     surface = (float(mesh.area_faces[planar].sum()) + sum(c[0] for c in cylinders)) / mesh.area
-    flanged = turned and _flanged(mesh, *axis, p)
+    flanged = turned and _flanged(points, *axis, p)
     height = stable_rests(mesh)[0].height
     if height <= p.thin_height + 1e-6:  # 1 um: an STL's float32 coordinates make 8 mm 8.000003 mm
         kind = PartClass.THIN
