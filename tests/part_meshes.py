@@ -1,0 +1,49 @@
+"""Meshes with known symmetries and classes, built in the tests (metres, closed solids)."""
+
+from __future__ import annotations
+
+import numpy as np
+import trimesh
+
+
+def box(extents=(0.06, 0.04, 0.02)) -> trimesh.Trimesh:
+    return trimesh.creation.box(extents)
+
+
+def cylinder(radius=0.02, height=0.05) -> trimesh.Trimesh:
+    return trimesh.creation.cylinder(radius=radius, height=height, sections=64)
+
+
+def l_bracket(leg_a=0.05, leg_b=0.05, thickness=0.006, width=0.03) -> trimesh.Trimesh:
+    """An L profile (legs leg_a along x and leg_b along y, both thickness thick) extruded width along z."""
+    t = thickness
+    outline = np.array([(0, 0), (leg_a, 0), (leg_a, t), (t, t), (t, leg_b), (0, leg_b)], float)
+    caps = [(0, 1, 2), (0, 2, 3), (0, 3, 4), (0, 4, 5)]
+    n = len(outline)
+    vertices = np.vstack((np.column_stack((outline, np.zeros(n))), np.column_stack((outline, np.full(n, width)))))
+    faces = [(c, b, a) for a, b, c in caps] + [(a + n, b + n, c + n) for a, b, c in caps]
+    for i in range(n):
+        j = (i + 1) % n
+        faces += [(i, j, j + n), (i, j + n, i + n)]
+    mesh = trimesh.Trimesh(vertices, np.array(faces))
+    assert mesh.is_watertight and mesh.volume > 0
+    return mesh
+
+
+def plate_with_hole(offset=0.02) -> trimesh.Trimesh:
+    """An 80 x 50 x 6 mm plate with a 12 mm hole through it, ``offset`` from the centre along x."""
+    plate = trimesh.creation.box((0.08, 0.05, 0.006))
+    hole = trimesh.creation.cylinder(radius=0.006, height=0.02, sections=48)
+    hole.apply_translation((offset, 0.0, 0.0))
+    return trimesh.boolean.difference([plate, hole], engine="manifold")
+
+
+def flanged_bushing() -> trimesh.Trimesh:
+    """A bushing of radius 15 mm, 40 mm long, with a 6 mm thick flange of radius 30 mm at one end."""
+    profile = np.array([(0, 0), (0.03, 0), (0.03, 0.006), (0.015, 0.006), (0.015, 0.04), (0, 0.04)])
+    return trimesh.creation.revolve(profile, sections=64)
+
+
+def ellipsoid() -> trimesh.Trimesh:
+    """A smooth ellipsoid of half axes 40, 25 and 15 mm: no plane, no cylinder, no symmetry axis of revolution."""
+    return trimesh.creation.icosphere(subdivisions=4, radius=1.0).apply_scale((0.04, 0.025, 0.015))
