@@ -54,6 +54,7 @@ bench: setup $(BENCH_STAMP)
 	$(BIN)/python benchmarks/table1.py
 	$(BIN)/python benchmarks/verify_compiled.py
 	$(BIN)/python benchmarks/peers.py
+	$(BIN)/python benchmarks/generalization.py
 	$(BIN)/python benchmarks/sensors.py
 	$(BIN)/python benchmarks/grasp_tolerance.py
 	$(BIN)/python benchmarks/episodes.py

@@ -37,6 +37,7 @@ from psorr.io.meshes import MESH_SUFFIXES
 from psorr.synthetic.mesh_scenes import SceneKind, load_meshes, mesh_scene, simple_shapes
 
 ROOT = Path(__file__).resolve().parents[1]
+DEFAULT_CAD = ROOT.parent / "shared" / "cad" / "prusa_i3"
 METHODS = ("psorr", "orr", "o3d_global", "fpfh", "opencv_ppf")
 SPLIT_SEED = {"dev": 1, "test": 2}
 KIND_SEED = {SceneKind.SINGLE: 0, SceneKind.CLUTTER: 1, SceneKind.OCCLUDED: 2}
@@ -51,7 +52,7 @@ def _arguments(argv):
     parser.add_argument("--clutter", type=int, default=10, help="clutter scenes a half")
     parser.add_argument("--occluded", type=int, default=10, help="occluded clutter scenes a half")
     parser.add_argument("--methods", default=",".join(METHODS))
-    parser.add_argument("--cad", type=Path, default=ROOT.parent / "shared" / "cad" / "prusa_i3")
+    parser.add_argument("--cad", type=Path, help=f"the parts' folder (default: {DEFAULT_CAD})")
     parser.add_argument("--units", default="mm", help="the meshes' units (m or mm)")
     parser.add_argument("--note", default="", help="what else ran on the machine, for the record")
     parser.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "results")
@@ -61,7 +62,7 @@ def _arguments(argv):
     unknown = sorted(set(args.methods.split(",")) - set(METHODS))
     if unknown:
         parser.error(f"unknown methods {unknown}; choose from {', '.join(METHODS)}")
-    if not args.cad.is_dir():
+    if args.cad is not None and not args.cad.is_dir():
         parser.error(f"{args.cad}: no such folder; give the Prusa i3 parts with --cad (see ../shared/cad/README.md)")
     return args
 
@@ -165,6 +166,10 @@ def _drawn(data: dict, meshes: dict) -> list:
 
 def main(argv=None) -> int:
     args = _arguments(argv)
+    if args.cad is None and not DEFAULT_CAD.is_dir():
+        print(f"no parts under {DEFAULT_CAD}: nothing to benchmark (pass --cad DIR)", file=sys.stderr)
+        return 0
+    args.cad = args.cad or DEFAULT_CAD
     paths = {p.stem: p for p in sorted(args.cad.iterdir()) if p.suffix.lower() in MESH_SUFFIXES}
     meshes, short = checked_split(load_meshes(args.cad, args.units), args.cad)
     print(f"{len(meshes)} parts of at least 25 mm in {args.cad}; left out as shorter: {', '.join(short)}",

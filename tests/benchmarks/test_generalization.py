@@ -1,0 +1,77 @@
+"""The generalization benchmark's grading and report (benchmarks/generalization_parts.py, _report.py) on
+meshes built here and on hand-made results; the benchmark itself needs ../shared and runs as a script."""
+
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+import pytest
+from part_meshes import box, plate_with_hole
+from paths import BENCHMARKS
+
+from psorr.synthetic.mesh_scenes import mesh_scene
+from psorr.types import Detection
+
+sys.path.insert(0, str(BENCHMARKS))
+import generalization_parts as parts  # noqa: E402
+import generalization_report as report  # noqa: E402
+
+pytest.importorskip("networkx", reason="trimesh's stable poses need networkx (pip install networkx)")
+
+
+@pytest.fixture(scope="module")
+def graded():
+    meshes = {"plate": plate_with_hole(), "block": box((0.05, 0.03, 0.02))}
+    infos = {n: parts.part_info(n, m) for n, m in meshes.items()}
+    scene = mesh_scene(np.random.default_rng(0), meshes, "clutter", names=["plate", "block"])
+    return scene, infos
+
+
+def test_a_detection_at_the_true_pose_or_a_symmetric_one_finds_the_part(graded):
+    scene, infos = graded
+    plate = scene.instances[0]
+    flipped = plate.T_camera_model @ infos["plate"].symmetry.turns[1]
+    found, correct = parts.grade(scene, [Detection("plate", flipped, 0.9)], infos)
+    assert found == [True, False] and correct == [True]
+
+
+def test_a_pose_off_a_second_report_and_an_absent_model_are_false(graded):
+    scene, infos = graded
+    block = scene.instances[1].T_camera_model
+    off = block.copy()
+    off[:3, 3] += (0.0, 0.0, 0.2 * infos["block"].diameter)
+    detections = [Detection("block", block, 0.9), Detection("block", block, 0.8), Detection("plate", off, 0.7),
+                  Detection("gear", block, 0.6)]
+    found, correct = parts.grade(scene, detections, infos)
+    assert found == [False, True] and correct == [True, False, False, False]
+    assert parts.nearest_add(scene, detections, infos)[1] == pytest.approx(0.0, abs=1e-9)
+
+
+def _results() -> dict:
+    """A hand-made half: one single scene, one clutter scene with a part 20% seen."""
+    part_rows = [{"part": "plate", "class": "thin", "size": "50-100 mm"},
+                 {"part": "block", "class": "prismatic", "size": "25-50 mm"}]
+    scenes = [{"kind": "single", "instances": [{"part": "plate", "visibility": 1.0}]},
+              {"kind": "clutter", "instances": [{"part": "plate", "visibility": 0.9},
+                                                {"part": "block", "visibility": 0.2}]}]
+    methods = {"psorr": {"ms": [100.0, 300.0], "false": [0, 1], "found": [[True], [False, True]]},
+               "o3d_global": {"ms": [1000.0, 1000.0], "false": [2, 2], "found": [[False], [True, False]]}}
+    return {"splits": {"dev": {"parts": part_rows, "scenes": scenes, "methods": methods, "conditions": "test"}}}
+
+
+def test_recall_counts_the_instances_seen_enough():
+    summary = report.summary(_results()["splits"]["dev"], "psorr")
+    assert summary["single"] == (1, 1) and summary["clutter"] == (0, 1)  # the block, 20% seen, is left out
+    assert summary["thin"] == (1, 2) and summary["false_per_scene"] == 0.5
+    assert summary["median_ms"] == 200.0 and summary["peer_share"] == pytest.approx(0.2)
+
+
+def test_the_tables_say_what_was_met():
+    data = _results()
+    assert "| dev | psorr | 1/1 = 1.00 | 0/1 = 0.00 |" in report.methods_table(data)
+    targets = report.targets_table(data)
+    assert "| dev | single | 1/1 = 1.00 | >= 0.95 | met |" in targets
+    assert "| dev | median ms / scene | 200 | <= 300 | met |" in targets
+    assert "**missed**" in targets
+    assert "plate | dev | thin | 50-100 mm | 1/2 | 1/2" in report.parts_table(data)
