@@ -35,6 +35,7 @@ from psorr.hypotheses.pairs import PairCandidates
 from psorr.hypotheses.single_cylinder import SingleCylinderMatcher
 from psorr.hypotheses.single_plane import SinglePlaneMatcher
 from psorr.library.models import ModelLibrary
+from psorr.library.orr_table import OrrTable
 from psorr.library.ppf import scene_oriented_points
 from psorr.recognize_params import Method, Recognition, RecognitionStats, RecognizeParams
 from psorr.types import Detection, PointCloud, PrimitiveKind
@@ -68,6 +69,8 @@ class Recognizer:
         self.pairs = PairCandidates(library, p.pairs)
         self.single_plane = SinglePlaneMatcher(library.models, p.single_plane)
         self.single_cylinder = SingleCylinderMatcher(library.models, p.single_cylinder)
+        # ORR's own table of dense model pairs, built (or read from the training cache) once per recognizer.
+        self.orr_table = OrrTable.for_library(library, p.orr.table) if self.method is Method.ORR else None
 
     def recognize(self, cloud: PointCloud, rng: np.random.Generator | None = None) -> Recognition:
         """The library's models found in ``cloud`` (metres, sensor frame, seen from the origin; an image or
@@ -112,7 +115,7 @@ class Recognizer:
 
     def _orr(self, view: SceneView, rng: np.random.Generator) -> SearchResult:
         tally = self._new_tally(view)
-        found = orr_hypotheses(self.library, view, self.params.orr, rng)
+        found = orr_hypotheses(self.library, self.orr_table, view, self.params.orr, rng)
         self.acceptance(view, found.candidates, tally.claims)
         tally.add(found.hypotheses, found.verify_ms)
         return tally.result()
