@@ -13,7 +13,7 @@ from psorr.recognize import RecognizeParams, Recognizer
 LEARN = SHARED / "osd/learn"
 
 
-@pytest.mark.parametrize(("scene", "method", "model"), [("learn3", "orr", "circuit_board"),
+@pytest.mark.parametrize(("scene", "method", "model"), [("learn38", "orr", "circuit_board"),
                                                         ("learn44", "psorr", "u_channel")])
 def test_a_pose_only_the_table_supports_is_not_a_detection(library, scene, method, model):
     # At the far edge of the table, 1.6 m off, the depth tolerance (22 mm) is as tall as a board's components:
