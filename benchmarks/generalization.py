@@ -14,6 +14,9 @@ peer_o3d_global.py), fpfh (cluster-wise FPFH, peer_fpfh.py) and opencv_ppf (peer
 without OpenCV's contrib modules). Every method runs on one core, on a scene before the next scene.
 
     python benchmarks/generalization.py [--split dev|test|both] [--quick] [--note "what else ran"]
+
+With --methods naming some of the methods, a half whose scenes are those of the results already
+written keeps the other methods' rows from them, so that a change to one recognizer reruns only it.
 """
 
 from __future__ import annotations
@@ -164,6 +167,21 @@ def _drawn(data: dict, meshes: dict) -> list:
             for entry in data["splits"][split].get("sketches", [])]
 
 
+def _merged(old: dict | None, new: dict) -> dict:
+    """The new run of a half, keeping the methods it did not run from the old one when both ran the same
+    scenes (the peers need not rerun when only our recognizer changed); the sketches are PSORR's."""
+    if not old or old["scenes"] != new["scenes"]:
+        return new
+    kept = {m: r for m, r in old["methods"].items() if m not in new["methods"]}
+    if not kept:
+        return new
+    methods = {**kept, **new["methods"]}
+    return {**new, "methods": {m: methods[m] for m in METHODS if m in methods},
+            "sketches": new["sketches"] if "psorr" in new["methods"] else old.get("sketches", []),
+            "conditions": f"{', '.join(new['methods'])}: {new['conditions']}; "
+                          f"{', '.join(kept)}: {old['conditions']}"}
+
+
 def main(argv=None) -> int:
     args = _arguments(argv)
     if args.cad is None and not DEFAULT_CAD.is_dir():
@@ -180,7 +198,7 @@ def main(argv=None) -> int:
     if args.report_only and not data["splits"]:
         sys.exit(f"{json_path} holds no results to report: run without --report-only first")
     for split in () if args.report_only else (("dev", "test") if args.split == "both" else (args.split,)):
-        data["splits"][split] = run_split(split, meshes, paths, args)
+        data["splits"][split] = _merged(data["splits"].get(split), run_split(split, meshes, paths, args))
     data["splits"] = {k: data["splits"][k] for k in ("dev", "test") if k in data["splits"]}
     text = report(data)
     print(text)
