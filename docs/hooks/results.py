@@ -17,6 +17,7 @@ import statistics
 import sys
 
 import cell_tables as cell
+import generalization_tables as generalization
 import recognition_tables as recognition
 from tables_common import RESULTS, ROOT, TableError, load, table
 
@@ -81,6 +82,7 @@ TABLES = {
     "verify-compiled": recognition.verify_compiled, "verify-compiled-detail": recognition.verify_compiled_detail,
     "peers": recognition.peers, "peers-per-scene": recognition.peers_per_scene,
     "sensors": recognition.sensors,
+    **generalization.TABLES,
     "grasp-tolerance": cell.grasp_tolerance,
     "episodes": cell.episodes, "episodes-per-part": cell.episodes_per_part, "episodes-in-hand": cell.episodes_in_hand,
     "headline": headline,
