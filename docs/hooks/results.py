@@ -49,6 +49,7 @@ def headline(base: str = "") -> str:
          f"with an occluder, {(ps['single'][2] + ps['clutter'][2]) / len(pe['scenes']):.2f} false positives a scene; "
          f"{share:.3f} of Open3D FPFH's time"],
         [f"[The paper's Table 1]({base}table1.md)", recognition.table1_headline()],
+        generalization.headline_row(base),
         [f"[Other sensors, {sen['clutter_scenes']} clutter scenes]({base}sensors.md)",
          recognition.sensors_headline(sen["rows"])],
         [f"[Real clouds without our parts]({base}osd-false-positives.md)",
