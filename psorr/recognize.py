@@ -31,6 +31,7 @@ from psorr.decomposition.detail import decompose_with_leftovers
 from psorr.decomposition.support_crop import crop_to_parts
 from psorr.errors import InvalidInputError
 from psorr.hypotheses.orr import orr_hypotheses
+from psorr.hypotheses.outline import OutlineMatcher
 from psorr.hypotheses.pairs import PairCandidates
 from psorr.hypotheses.single_cylinder import SingleCylinderMatcher
 from psorr.hypotheses.single_plane import SinglePlaneMatcher
@@ -69,6 +70,7 @@ class Recognizer:
         self.pairs = PairCandidates(library, p.pairs)
         self.single_plane = SinglePlaneMatcher(library.models, p.single_plane)
         self.single_cylinder = SingleCylinderMatcher(library.models, p.single_cylinder)
+        self.outline = OutlineMatcher(library.models, p.outline) if p.outline.enabled else None
         # ORR's own table of dense model pairs, built (or read from the training cache) once per recognizer.
         self.orr_table = OrrTable.for_library(library, p.orr.table) if self.method is Method.ORR else None
 
@@ -133,6 +135,8 @@ class Recognizer:
         if scene is None:  # too sparse to decompose: nothing to find (as ORR says)
             return tally.result()
         self._search(cloud, view, scene, tally)
+        if self.outline is not None:  # parts too small to pair, by their outline on the table
+            self._single_search(view, tally, self.outline.candidates(cloud, view))
         if p.detail.fine_voxel is not None:
             self._second_look(cloud, cropped, view, margin, tally, rng)
         return tally.result()

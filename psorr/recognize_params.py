@@ -11,6 +11,7 @@ from psorr.decomposition import DecomposeParams
 from psorr.decomposition.detail import DetailParams
 from psorr.decomposition.support_crop import SupportCropParams
 from psorr.hypotheses.orr import OrrParams
+from psorr.hypotheses.outline import OutlineParams
 from psorr.hypotheses.pairs import PairParams
 from psorr.hypotheses.single_cylinder import SingleCylinderParams
 from psorr.hypotheses.single_plane import SinglePlaneParams
@@ -26,6 +27,7 @@ class RecognizeParams:
     - ``detail``: the finer passes, over the decomposition's leftovers and what stands unexplained (PSORR);
     - ``pairs``: pose hypotheses from primitive pairs, screened by box verification (PSORR);
     - ``single_plane``, ``single_cylinder``: poses from one face or one long cylinder (PSORR);
+    - ``outline``: poses from a part's outline on the table, for parts too small to pair (PSORR; off by default);
     - ``orr``: the ORR baseline's random point pairs;
     - ``acceptance``: ICP, the point check's bars, and settling detections by the pixels they explain.
     """
@@ -36,13 +38,14 @@ class RecognizeParams:
     pairs: PairParams = field(default_factory=PairParams)
     single_plane: SinglePlaneParams = field(default_factory=SinglePlaneParams)
     single_cylinder: SingleCylinderParams = field(default_factory=SingleCylinderParams)
+    outline: OutlineParams = field(default_factory=OutlineParams)
     orr: OrrParams = field(default_factory=OrrParams)
     acceptance: AcceptParams = field(default_factory=AcceptParams)
 
     def __post_init__(self):
         for name, cls in (("decompose", DecomposeParams), ("support_crop", SupportCropParams),
                           ("detail", DetailParams), ("pairs", PairParams), ("single_plane", SinglePlaneParams),
-                          ("single_cylinder", SingleCylinderParams), ("orr", OrrParams),
+                          ("single_cylinder", SingleCylinderParams), ("outline", OutlineParams), ("orr", OrrParams),
                           ("acceptance", AcceptParams)):
             check.instance(self, name, cls)
 
