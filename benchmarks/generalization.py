@@ -173,17 +173,23 @@ def _drawn(data: dict, meshes: dict) -> list:
 
 def _merged(old: dict | None, new: dict) -> dict:
     """The new run of a half, keeping the methods it did not run from the old one when both ran the same
-    scenes (the peers need not rerun when only our recognizer changed); the sketches are PSORR's."""
+    scenes (the peers need not rerun when only our recognizer changed); the sketches are PSORR's. Each
+    method's run conditions are kept beside it ("runs"), and the half's conditions line groups them."""
     if not old or old["scenes"] != new["scenes"]:
         return new
     kept = {m: r for m, r in old["methods"].items() if m not in new["methods"]}
     if not kept:
         return new
     methods = {**kept, **new["methods"]}
-    return {**new, "methods": {m: methods[m] for m in METHODS if m in methods},
+    runs = {**{m: old.get("runs", {}).get(m, old["conditions"]) for m in kept},
+            **{m: new["conditions"] for m in new["methods"]}}
+    order = [m for m in METHODS if m in methods]
+    grouped: dict[str, list[str]] = {}
+    for m in order:
+        grouped.setdefault(runs[m], []).append(m)
+    return {**new, "methods": {m: methods[m] for m in order}, "runs": {m: runs[m] for m in order},
             "sketches": new["sketches"] if "psorr" in new["methods"] else old.get("sketches", []),
-            "conditions": f"{', '.join(new['methods'])}: {new['conditions']}; "
-                          f"{', '.join(kept)}: {old['conditions']}"}
+            "conditions": "; ".join(f"{', '.join(ms)}: {c}" for c, ms in grouped.items())}
 
 
 def main(argv=None) -> int:

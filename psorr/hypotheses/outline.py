@@ -154,12 +154,23 @@ class OutlineMatcher:
             if len(cells) * p.cell**2 >= p.min_area:
                 yield cells * p.cell + low, on_table[owner == k, 2]
 
-    def _overlap(self, xy: np.ndarray, angle: float, centre: np.ndarray, target: np.ndarray, low) -> float:
-        """Intersection over union of the silhouette samples ``xy`` turned by ``angle`` onto ``centre`` with
-        the patch's mask ``target`` (grid corner ``low``)."""
-        c, n = np.cos(angle), np.sin(angle)
-        turned = _mask(xy @ np.array([[c, n], [-n, c]]) + centre, low, target.shape, self.params.cell)
-        return float((turned & target).sum() / max((turned | target).sum(), 1))
+    def _overlaps(self, xy: np.ndarray, angles: np.ndarray, centre: np.ndarray, target: np.ndarray, low) -> np.ndarray:
+        """(A,) intersection over union of the silhouette samples ``xy`` turned by each of ``angles`` onto
+        ``centre`` with the patch's mask ``target`` (grid corner ``low``); all turns drawn and closed at once."""
+        c, n = np.cos(angles)[:, None, None], np.sin(angles)[:, None, None]
+        turned = np.stack([xy[:, 0] * c[:, :, 0] - xy[:, 1] * n[:, :, 0],
+                           xy[:, 0] * n[:, :, 0] + xy[:, 1] * c[:, :, 0]], axis=-1) + centre   # (A, N, 2)
+        index = np.floor((turned - low) / self.params.cell).astype(np.int64)
+        inside = (index >= 0).all(axis=2) & (index[..., 0] < target.shape[0]) & (index[..., 1] < target.shape[1])
+        masks = np.zeros((len(angles),) + target.shape, dtype=bool)
+        turn = np.broadcast_to(np.arange(len(angles))[:, None], inside.shape)
+        masks[turn[inside], index[..., 0][inside], index[..., 1][inside]] = True
+        # Each turn closed on its own, as _mask closes one: the structure spans no two turns.
+        flat = np.zeros((3, 3, 3), dtype=bool)
+        flat[1] = ndimage.generate_binary_structure(2, 1)
+        masks = ndimage.binary_closing(masks, structure=flat, iterations=2)
+        both = (masks & target).sum(axis=(1, 2))
+        return both / np.maximum((masks | target).sum(axis=(1, 2)), 1)
 
     def _matches(self, patch: np.ndarray, heights: np.ndarray, T_cloud_table: np.ndarray) -> list:
         """(overlap, model, T_cloud_model) of the silhouettes turned onto one patch (cell centres (N, 2))."""
@@ -173,7 +184,7 @@ class OutlineMatcher:
             if not p.area_ratio[0] * s.area < area < p.area_ratio[1] * s.area or abs(top - s.height) > p.height_slack:
                 continue
             angles = np.radians(np.arange(0.0, 360.0, p.angle_step_deg))
-            overlap = np.array([self._overlap(s.xy, angle, centre, target, low) for angle in angles])
+            overlap = self._overlaps(s.xy, angles, centre, target, low)
             # The best turns that are peaks of the overlap, not a peak's shoulders: a half-turned twin
             # (a plate's hole at the other end) is a second peak.
             peaks = np.flatnonzero((overlap >= np.roll(overlap, 1)) & (overlap >= np.roll(overlap, -1)))
