@@ -47,3 +47,13 @@ def flanged_bushing() -> trimesh.Trimesh:
 def ellipsoid() -> trimesh.Trimesh:
     """A smooth ellipsoid of half axes 40, 25 and 15 mm: no plane, no cylinder, no symmetry axis of revolution."""
     return trimesh.creation.icosphere(subdivisions=4, radius=1.0).apply_scale((0.04, 0.025, 0.015))
+
+
+def trained_library(parts: dict[str, trimesh.Trimesh], folder):
+    """A psorr ModelLibrary trained from ``parts`` (name -> mesh), written as STL files into ``folder``
+    (a pytest tmp path), without the training cache."""
+    from psorr.library.models import ModelLibrary
+
+    for name, mesh in parts.items():
+        mesh.export(folder / f"{name}.stl")
+    return ModelLibrary.from_meshes(sorted(folder.glob("*.stl")), use_cache=False)

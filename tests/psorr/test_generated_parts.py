@@ -11,9 +11,8 @@ from functools import cache
 import numpy as np
 import pytest
 import trimesh
-from part_meshes import box, cylinder, l_bracket, plate_with_hole
+from part_meshes import box, cylinder, l_bracket, plate_with_hole, trained_library
 
-from psorr.library.models import ModelLibrary
 from psorr.recognize import Recognizer
 from psorr.synthetic.catalog import model_diameter
 from psorr.synthetic.mesh_scenes import mesh_scene, simple_shapes
@@ -27,10 +26,7 @@ PARTS = {"bracket": l_bracket(0.06, 0.04), "plate": plate_with_hole(), "bar": bo
 
 @pytest.fixture(scope="module")
 def library(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("generated")
-    for name, mesh in PARTS.items():
-        mesh.export(folder / f"{name}.stl")
-    return ModelLibrary.from_meshes(sorted(folder.glob("*.stl")), use_cache=False)
+    return trained_library(PARTS, tmp_path_factory.mktemp("generated"))
 
 
 @pytest.fixture(scope="module")

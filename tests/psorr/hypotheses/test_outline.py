@@ -4,11 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from part_meshes import box, l_bracket, plate_with_hole
+from part_meshes import box, l_bracket, plate_with_hole, trained_library
 
 from psorr.errors import InvalidInputError
 from psorr.hypotheses.outline import OutlineMatcher, OutlineParams, table_frame
-from psorr.library.models import ModelLibrary
 from psorr.recognize import Recognizer
 from psorr.recognize_params import RecognizeParams
 from psorr.synthetic.mesh_scenes import mesh_scene
@@ -22,10 +21,7 @@ PARTS = {"bracket": l_bracket(0.06, 0.04), "plate": plate_with_hole(), "bar": bo
 
 @pytest.fixture(scope="module")
 def library(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("outline")
-    for name, mesh in PARTS.items():
-        mesh.export(folder / f"{name}.stl")
-    return ModelLibrary.from_meshes(sorted(folder.glob("*.stl")), use_cache=False)
+    return trained_library(PARTS, tmp_path_factory.mktemp("outline"))
 
 
 def _mean_offset(model, A, B) -> float:
