@@ -19,6 +19,7 @@ import trimesh
 from scipy import ndimage
 
 from psorr.checks import params as check
+from psorr.geometry.boxes import orthonormal_frame
 from psorr.hypotheses.candidates import Candidate, CandidateSet
 from psorr.sensing.kinect_noise import KINECT_V1
 from psorr.types import PointCloud
@@ -69,13 +70,22 @@ class Silhouette:
     T_table_model: np.ndarray
 
 
+def _masks(xy: np.ndarray, low: np.ndarray, shape: tuple[int, int], cell: float) -> np.ndarray:
+    """(A, *shape) bool images from corner ``low``: the grid cells that each of A point sets (A, N, 2) falls
+    in, each closed on its own."""
+    index = np.floor((xy - low) / cell).astype(np.int64)
+    inside = (index >= 0).all(axis=2) & (index[..., 0] < shape[0]) & (index[..., 1] < shape[1])
+    masks = np.zeros((len(xy),) + tuple(shape), dtype=bool)
+    which = np.broadcast_to(np.arange(len(xy))[:, None], inside.shape)
+    masks[which[inside], index[..., 0][inside], index[..., 1][inside]] = True
+    flat = np.zeros((3, 3, 3), dtype=bool)  # the 2-D closing's cross, spanning no two images
+    flat[1] = ndimage.generate_binary_structure(2, 1)
+    return ndimage.binary_closing(masks, structure=flat, iterations=2)
+
+
 def _mask(xy: np.ndarray, low: np.ndarray, shape: tuple[int, int], cell: float) -> np.ndarray:
     """The grid cells (a bool image of ``shape`` from corner ``low``) that the points (N, 2) fall in, closed."""
-    index = np.floor((xy - low) / cell).astype(np.int64)
-    inside = (index >= 0).all(axis=1) & (index[:, 0] < shape[0]) & (index[:, 1] < shape[1])
-    mask = np.zeros(shape, dtype=bool)
-    mask[index[inside, 0], index[inside, 1]] = True
-    return ndimage.binary_closing(mask, iterations=2)
+    return _masks(xy[None], low, shape, cell)[0]
 
 
 def _grid(xy: np.ndarray, cell: float, margin: float) -> tuple[np.ndarray, tuple[int, int]]:
@@ -86,11 +96,10 @@ def _grid(xy: np.ndarray, cell: float, margin: float) -> tuple[np.ndarray, tuple
 def table_frame(plane: np.ndarray) -> np.ndarray:
     """T_cloud_table (4, 4) of a supporting plane (a, b, c, d; unit normal towards the sensor): z along the
     normal, the origin the plane's point nearest the sensor."""
-    normal = plane[:3]
-    x = np.cross(normal, [1.0, 0.0, 0.0] if abs(normal[0]) < 0.9 else [0.0, 1.0, 0.0])
-    x /= np.linalg.norm(x)
+    normal = np.asarray(plane[:3], dtype=float)
     T = np.eye(4)
-    T[:3, 0], T[:3, 1], T[:3, 2], T[:3, 3] = x, np.cross(normal, x), normal, -plane[3] * normal
+    T[:3, 0], T[:3, 1] = orthonormal_frame(normal)
+    T[:3, 2], T[:3, 3] = normal, -plane[3] * normal
     return T
 
 
@@ -102,6 +111,7 @@ class OutlineMatcher:
 
         self.params, self.silhouettes = params, []
         p = params
+        self.turn_angles = np.radians(np.arange(0.0, 360.0, p.angle_step_deg))
         for index, model in enumerate(models):
             mesh = trimesh.Trimesh(model.vertices, model.faces, process=False)
             for rest in stable_rests(mesh)[:p.rests]:
@@ -154,26 +164,17 @@ class OutlineMatcher:
             if len(cells) * p.cell**2 >= p.min_area:
                 yield cells * p.cell + low, on_table[owner == k, 2]
 
-    def _overlaps(self, xy: np.ndarray, angles: np.ndarray, centre: np.ndarray, target: np.ndarray, low) -> np.ndarray:
-        """(A,) intersection over union of the silhouette samples ``xy`` turned by each of ``angles`` onto
+    def _overlaps(self, xy: np.ndarray, centre: np.ndarray, target: np.ndarray, low) -> np.ndarray:
+        """(A,) intersection over union of the silhouette samples ``xy`` turned by each of the turn angles onto
         ``centre`` with the patch's mask ``target`` (grid corner ``low``); all turns drawn and closed at once."""
-        c, n = np.cos(angles)[:, None, None], np.sin(angles)[:, None, None]
-        turned = np.stack([xy[:, 0] * c[:, :, 0] - xy[:, 1] * n[:, :, 0],
-                           xy[:, 0] * n[:, :, 0] + xy[:, 1] * c[:, :, 0]], axis=-1) + centre   # (A, N, 2)
-        index = np.floor((turned - low) / self.params.cell).astype(np.int64)
-        inside = (index >= 0).all(axis=2) & (index[..., 0] < target.shape[0]) & (index[..., 1] < target.shape[1])
-        masks = np.zeros((len(angles),) + target.shape, dtype=bool)
-        turn = np.broadcast_to(np.arange(len(angles))[:, None], inside.shape)
-        masks[turn[inside], index[..., 0][inside], index[..., 1][inside]] = True
-        # Each turn closed on its own, as _mask closes one: the structure spans no two turns.
-        flat = np.zeros((3, 3, 3), dtype=bool)
-        flat[1] = ndimage.generate_binary_structure(2, 1)
-        masks = ndimage.binary_closing(masks, structure=flat, iterations=2)
+        c, n = np.cos(self.turn_angles)[:, None], np.sin(self.turn_angles)[:, None]
+        turned = np.stack([xy[:, 0] * c - xy[:, 1] * n, xy[:, 0] * n + xy[:, 1] * c], axis=-1) + centre  # (A, N, 2)
+        masks = _masks(turned, low, target.shape, self.params.cell)
         both = (masks & target).sum(axis=(1, 2))
         return both / np.maximum((masks | target).sum(axis=(1, 2)), 1)
 
     def _matches(self, patch: np.ndarray, heights: np.ndarray, T_cloud_table: np.ndarray) -> list:
-        """(overlap, model, T_cloud_model) of the silhouettes turned onto one patch (cell centres (N, 2))."""
+        """(overlap, model, T_cloud_model) of the silhouettes turned onto one patch (its cells' corners (N, 2))."""
         p = self.params
         centre, area = patch.mean(axis=0), len(patch) * p.cell**2
         top = np.percentile(heights, 95) if len(heights) else 0.0
@@ -183,12 +184,11 @@ class OutlineMatcher:
         for s in self.silhouettes:
             if not p.area_ratio[0] * s.area < area < p.area_ratio[1] * s.area or abs(top - s.height) > p.height_slack:
                 continue
-            angles = np.radians(np.arange(0.0, 360.0, p.angle_step_deg))
-            overlap = self._overlaps(s.xy, angles, centre, target, low)
+            overlap = self._overlaps(s.xy, centre, target, low)
             # The best turns that are peaks of the overlap, not a peak's shoulders: a half-turned twin
             # (a plate's hole at the other end) is a second peak.
             peaks = np.flatnonzero((overlap >= np.roll(overlap, 1)) & (overlap >= np.roll(overlap, -1)))
-            turns = sorted(((overlap[k], angles[k]) for k in peaks), key=lambda t: -t[0])
+            turns = sorted(((overlap[k], self.turn_angles[k]) for k in peaks), key=lambda t: -t[0])
             for share, angle in turns[:p.angles]:
                 Rz = np.eye(4)
                 Rz[:2, :2] = [[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]]
