@@ -3,17 +3,11 @@ own report code (benchmarks/generalization_report.py), so that the site and the 
 
 from __future__ import annotations
 
-import importlib.util
-
-from tables_common import ROOT, load
+from tables_common import benchmark_module, load
 
 
 def _report():
-    spec = importlib.util.spec_from_file_location("generalization_report",
-                                                  ROOT / "benchmarks" / "generalization_report.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return benchmark_module("generalization_report")
 
 
 def _rendered(name: str):

@@ -3,10 +3,9 @@ verification, peers, sensors), each from its ``benchmarks/results/*.json``."""
 
 from __future__ import annotations
 
-import importlib.util
 import statistics
 
-from tables_common import ROOT, frac, load, met, table
+from tables_common import benchmark_module, frac, load, met, table
 
 # ---- decomposition of the OSD learn set (benchmarks/decompose.py) -------------------------------------------
 
@@ -85,10 +84,7 @@ def osd_false_by_model() -> str:
 # ---- the paper's Table 1 (benchmarks/table1.py, whose own report formats the cases) ----------------------------
 
 def _table1_report():
-    spec = importlib.util.spec_from_file_location("table1_report", ROOT / "benchmarks" / "table1_report.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return benchmark_module("table1_report")
 
 
 def table1_summary() -> str:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib.util
 import json
 from pathlib import Path
 
@@ -18,6 +19,14 @@ def load(name: str) -> dict:
     if not path.exists():
         raise TableError(f"{path.relative_to(ROOT)} is missing: run `python benchmarks/{name}.py` (or `make bench`)")
     return json.loads(path.read_text())
+
+
+def benchmark_module(name: str):
+    """benchmarks/<name>.py loaded as a module: a benchmark's own report code, so the site prints what it does."""
+    spec = importlib.util.spec_from_file_location(name, ROOT / "benchmarks" / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
 
 def table(header: list[str], rows: list[list], align: str = "") -> str:
