@@ -21,7 +21,7 @@ import trimesh
 
 from psorr.synthetic.catalog import model_diameter
 from psorr.synthetic.mesh_scenes import MeshScene
-from psorr.synthetic.mesh_symmetry import MeshSymmetry, find_symmetries, mesh_symmetric_add
+from psorr.synthetic.mesh_symmetry import MeshSymmetry, find_symmetries, match_detections, mesh_symmetric_add
 from psorr.synthetic.part_shapes import PartShape, part_shape
 
 MIN_LENGTH = 0.025  # m: the issue's parts are those at least 25 mm long at true scale
@@ -111,14 +111,7 @@ def grade(scene: MeshScene, detections, infos: dict[str, PartInfo]) -> tuple[lis
     """(found per instance, correct per detection): a detection finds the first instance of its model not
     yet found within a symmetry-aware ADD of ADD_SHARE x the model's diameter; any other detection is
     false, a second report of an instance and a detection of a model not in the scene included."""
-    found, correct = [False] * len(scene.instances), []
-    for det in detections:
-        info = infos.get(det.model)
-        hit = next((k for k, inst in enumerate(scene.instances) if info is not None and not found[k]
-                    and inst.name == det.model and mesh_symmetric_add(
-                        info.samples, det.T_cloud_model, inst.T_camera_model, info.symmetry)
-                    < ADD_SHARE * info.diameter), None)
-        correct.append(hit is not None)
-        if hit is not None:
-            found[hit] = True
-    return found, correct
+    def known(name: str):
+        info = infos.get(name)
+        return None if info is None else (info.samples, info.symmetry, info.diameter)
+    return match_detections(scene.instances, detections, known, ADD_SHARE)

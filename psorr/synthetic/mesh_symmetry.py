@@ -196,3 +196,22 @@ def mesh_symmetric_add(points_model, T_est, T_true, symmetry: MeshSymmetry) -> f
         raise InvalidInputError(f"symmetry must be a MeshSymmetry (from find_symmetries(mesh)), got a "
                                 f"{type(symmetry).__name__}")
     return symmetric_add(points_model, T_est, T_true, symmetry)
+
+
+def match_detections(instances, detections, known, share: float = 0.1) -> tuple[list[bool], list[bool]]:
+    """(found per instance, correct per detection): each detection, in order, finds the first instance
+    (``T_camera_model`` and ``name``) of its model not yet found within a symmetry-aware ADD of ``share`` x
+    the model's diameter; any other detection is false, a second report of an instance included.
+    ``known(name)`` gives a model's (surface samples (N, 3), MeshSymmetry, diameter), or None for a model
+    that no instance can be."""
+    found, correct = [False] * len(instances), []
+    for det in detections:
+        model = known(det.model)
+        hit = None if model is None else next(
+            (k for k, inst in enumerate(instances) if not found[k] and inst.name == det.model
+             and mesh_symmetric_add(model[0], det.T_cloud_model, inst.T_camera_model, model[1]) < share * model[2]),
+            None)
+        correct.append(hit is not None)
+        if hit is not None:
+            found[hit] = True
+    return found, correct

@@ -16,7 +16,7 @@ from part_meshes import box, cylinder, l_bracket, plate_with_hole, trained_libra
 from psorr.recognize import Recognizer
 from psorr.synthetic.catalog import model_diameter
 from psorr.synthetic.mesh_scenes import mesh_scene, simple_shapes
-from psorr.synthetic.mesh_symmetry import find_symmetries, mesh_symmetric_add
+from psorr.synthetic.mesh_symmetry import find_symmetries, match_detections
 
 pytest.importorskip("networkx", reason="trimesh's stable poses need networkx (pip install networkx)")
 
@@ -43,17 +43,8 @@ def _known(name: str):
 
 def _graded(scene, detections) -> tuple[list[bool], int]:
     """(found per instance, false detections) of ``detections`` in a scene of PARTS."""
-    found, false = [False] * len(scene.instances), 0
-    for d in detections:
-        samples, symmetry, diameter = _known(d.model)
-        hit = next((k for k, inst in enumerate(scene.instances) if not found[k] and inst.name == d.model
-                    and mesh_symmetric_add(samples, d.T_cloud_model, inst.T_camera_model, symmetry) < 0.1 * diameter),
-                   None)
-        if hit is None:
-            false += 1
-        else:
-            found[hit] = True
-    return found, false
+    found, correct = match_detections(scene.instances, detections, _known)
+    return found, correct.count(False)
 
 
 @pytest.mark.parametrize("seed", [0, 1])
