@@ -11,6 +11,7 @@ import numpy as np
 import open3d as o3d
 
 from psorr.geometry.open3d_threads import single_threaded
+from psorr.sensing.resolution import grid_focal
 from psorr.types import PointCloud
 
 KINECT_FOCAL = 525.0  # pixels of a 640-wide Kinect v1 image
@@ -53,7 +54,7 @@ def buffer_focal(cloud: PointCloud, ux: np.ndarray, uy: np.ndarray) -> float:
     pass as unseen."""
     if cloud.is_organised:
         kinect = KINECT_FOCAL * cloud.width / 640.0
-        own = _grid_focal(cloud)
+        own = grid_focal(cloud)
         return own if own is not None and abs(own / kinect - 1.0) > 0.02 else kinect
     from scipy.spatial import cKDTree
 
@@ -66,20 +67,6 @@ def buffer_focal(cloud: PointCloud, ux: np.ndarray, uy: np.ndarray) -> float:
         return KINECT_FOCAL
     step = float(np.median(disc[:, 1]))
     return 1.0 / step if step > _GRID_NEIGHBOUR * spacing else _SCATTERED_FOCAL / spacing
-
-
-def _grid_focal(cloud: PointCloud) -> float | None:
-    """The horizontal focal length (pixels) of an organised cloud's pinhole grid, fitted from its columns
-    u = f x / z + c; None when too few points fit it to within a pixel (not a pinhole image)."""
-    rows = np.flatnonzero(cloud.valid_mask)[::7]  # every 7th of 300 000 fits as well, 7x faster
-    rows = rows[cloud.points[rows, 2] > 1e-3]
-    if len(rows) < 100:
-        return None
-    slope = cloud.points[rows, 0] / cloud.points[rows, 2]
-    u = (rows % cloud.width).astype(np.float64)
-    (focal, centre), *_ = np.linalg.lstsq(np.column_stack([slope, np.ones_like(slope)]), u, rcond=None)
-    rms = float(np.sqrt(np.mean((focal * slope + centre - u) ** 2)))
-    return float(focal) if focal > 0 and rms < 1.0 else None
 
 
 class SceneView:
