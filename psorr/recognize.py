@@ -39,6 +39,7 @@ from psorr.library.models import ModelLibrary
 from psorr.library.orr_table import OrrTable
 from psorr.library.ppf import scene_oriented_points
 from psorr.recognize_params import Method, Recognition, RecognitionStats, RecognizeParams
+from psorr.sensing.resolution import thin_to_focal
 from psorr.types import Detection, PointCloud, PrimitiveKind
 from psorr.verification.scene_view import SceneView
 
@@ -86,6 +87,7 @@ class Recognizer:
         require_seen_from_origin(cloud, "recognize(): the cloud")
         rng = random_generator(rng, "recognize()")
         start = time.perf_counter()
+        cloud = self._at_sensor_sampling(cloud)
         if not cloud.valid_mask.any():  # a frame the sensor measured nothing in (the arm over its lens): none here
             return Recognition((), RecognitionStats(self.method, 0, 0.0, 0.0, 0.0, self.library.train_ms))
         view = SceneView(cloud)
@@ -104,7 +106,14 @@ class Recognizer:
         require_seen_from_origin(cloud, "refine(): the cloud")
         m = self.library.model(model)
         T = require_sensor_pose(T_cloud_model, "refine()'s T_cloud_model")
-        return self.acceptance.refine(SceneView(cloud), m, T)
+        return self.acceptance.refine(SceneView(self._at_sensor_sampling(cloud)), m, T)
+
+    def _at_sensor_sampling(self, cloud: PointCloud) -> PointCloud:
+        """The cloud thinned to the sampling the thresholds suit, when it is finer (a 3M-point
+        structured-light frame); a Kinect-v1-like cloud as it is (docs/decisions/0050)."""
+        if not self.params.decompose.sensor_noise:
+            return cloud
+        return thin_to_focal(cloud, self.params.decompose.sensor_focal).cloud
 
     def _stats(self, found: SearchResult, start: float) -> RecognitionStats:
         # No hypothesis, no verification to report: the cost of screening none is no cost per hypothesis.

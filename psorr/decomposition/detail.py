@@ -87,7 +87,7 @@ def decompose_leftovers(cloud: PointCloud, coarse: Decomposition, voxel_size: fl
     stats = DecompositionStats(a.total_ms + (time.perf_counter() - start) * 1e3, a.preprocess_ms + b.preprocess_ms,
                                a.hypotheses_ms + b.hypotheses_ms, a.graphcut_ms + b.graphcut_ms,
                                a.merge_ms + b.merge_ms, a.n_voxels + b.n_voxels, a.n_hypotheses + b.n_hypotheses,
-                               a.n_merges + b.n_merges)
+                               a.n_merges + b.n_merges, a.n_sampled)
     return Decomposition(PrimitiveShapeGraph(primitives, tuple(edges)), labels, stats)
 
 

@@ -11,6 +11,7 @@ from scipy.spatial import cKDTree
 
 from psorr.errors import TooSparseError
 from psorr.geometry.columns import column_max, column_min
+from psorr.sensing.resolution import pixel_samples
 from psorr.types import PointCloud
 
 
@@ -27,6 +28,7 @@ class Voxelized:
             into, or -1 for NaN points.
         neighbours: (M, k) indices of each voxel's k nearest voxels (itself excluded).
         neighbour_dist: (M, k) their distances, metres.
+        n_sampled: the finite points the voxels were built from.
     """
 
     points: np.ndarray
@@ -35,6 +37,7 @@ class Voxelized:
     voxel_of: np.ndarray
     neighbours: np.ndarray
     neighbour_dist: np.ndarray
+    n_sampled: int
 
     def __len__(self) -> int:
         return len(self.points)
@@ -135,11 +138,16 @@ def neighbourhood_normals(points: np.ndarray, neighbours: np.ndarray) -> tuple[n
     return normals, curvature
 
 
-def preprocess(cloud: PointCloud, voxel_size: float, k_neighbours: int) -> Voxelized:
+def preprocess(cloud: PointCloud, voxel_size: float, k_neighbours: int,
+               sensor_focal: float | None = None) -> Voxelized:
     """Downsample the finite points of `cloud` and build the k-NN graph.
 
     A cloud that carries normals (say, sampled from a CAD mesh) keeps them,
     averaged per voxel; otherwise they are estimated and made to face the sensor.
+    A cloud sampled finer than a sensor of `sensor_focal` pixels (None: never
+    thinned) builds its voxels from one row per pixel of that sensor's image
+    (psorr.sensing.resolution), and every other finite point belongs to the voxel
+    of its pixel's row.
     """
     valid = cloud.valid_mask
     n_valid = int(valid.sum())
@@ -148,7 +156,16 @@ def preprocess(cloud: PointCloud, voxel_size: float, k_neighbours: int) -> Voxel
             f"the cloud has {n_valid} finite points; decomposition needs at least {k_neighbours + 1}"
         )
     given = None if cloud.normals is None else cloud.normals[valid]
-    centroids, voxel_of_valid = voxel_downsample(cloud.points[valid], voxel_size, given)
+    points = cloud.points if n_valid == len(cloud) else cloud.points[valid]
+    sampled = None if sensor_focal is None else pixel_samples(cloud, sensor_focal)
+    if sampled is None or not sampled.finer:
+        centroids, voxel_of_valid = voxel_downsample(points, voxel_size, given)
+    else:
+        # Every point joins the voxel of the row its pixel kept; the final distance test sorts out the
+        # points behind that surface.
+        centroids, voxel_of_sampled = voxel_downsample(cloud.points[sampled.kept], voxel_size)
+        of_valid = sampled.sample_of[valid]
+        voxel_of_valid = np.where(of_valid >= 0, voxel_of_sampled[of_valid], -1)
     if len(centroids) < k_neighbours + 1:
         raise TooSparseError(
             f"its points fill only {len(centroids)} voxels of {voxel_size} m, and decomposition needs at least "
@@ -160,10 +177,13 @@ def preprocess(cloud: PointCloud, voxel_size: float, k_neighbours: int) -> Voxel
     neighbours, neighbour_dist = idx[:, 1:], dist[:, 1:]
     normals, curvature = neighbourhood_normals(centroids, neighbours)
     if given is not None:
-        summed = np.column_stack([np.bincount(voxel_of_valid, given[:, k], len(centroids)) for k in range(3)])
+        held = voxel_of_valid >= 0
+        summed = np.column_stack([np.bincount(voxel_of_valid[held], given[held, k], len(centroids))
+                                  for k in range(3)])
         length = np.linalg.norm(summed, axis=1, keepdims=True)
         normals = np.where(length > 1e-9, summed / np.maximum(length, 1e-12), normals)
-    return Voxelized(centroids, normals, curvature, voxel_of, neighbours, neighbour_dist)
+    n_sampled = n_valid if sampled is None or not sampled.finer else len(sampled.kept)
+    return Voxelized(centroids, normals, curvature, voxel_of, neighbours, neighbour_dist, n_sampled)
 
 
 def undirected_edges(vox: Voxelized) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
