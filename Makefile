@@ -56,6 +56,7 @@ bench: setup $(BENCH_STAMP)
 	$(BIN)/python benchmarks/peers.py
 	$(BIN)/python benchmarks/generalization.py
 	$(BIN)/python benchmarks/sensors.py
+	$(BIN)/python benchmarks/density.py
 	$(BIN)/python benchmarks/grasp_tolerance.py
 	$(BIN)/python benchmarks/episodes.py
 

@@ -1,5 +1,5 @@
 """The recognition benchmarks' tables (decomposition, kernels, false detections, Table 1, compiled
-verification, peers, sensors), each from its ``benchmarks/results/*.json``."""
+verification, peers, sensors, point density), each from its ``benchmarks/results/*.json``."""
 
 from __future__ import annotations
 
@@ -199,3 +199,19 @@ def sensors_headline(rows) -> str:
         return (f"{found}/{n} parts, {false} false detections, from each of the {len(rows)} clouds (two sensors, "
                 "organised or stripped of NaNs)")
     return "; ".join(f"{r['sensor']}, {r['cloud']}: {r['found']}/{r['instances']}, {r['false']} false" for r in rows)
+
+
+# ---- point density (benchmarks/density.py) ---------------------------------------------------------------------
+
+def density() -> str:
+    data = load("density")
+    rows = []
+    for r in data["rows"]:
+        found = frac(r["found"], r["instances"]) if "found" in r else ""
+        rows.append([r["scene"], f"{r['points'] / 1e6:.2f}M", f"{r['sampled'] / 1e6:.2f}M",
+                     ", ".join(map(str, r["primitives"])), f"{r['ms']:.0f}",
+                     ", ".join(map(str, r["peer_planes"])), f"{r['peer_ms']:.0f}", found, str(r.get("false", "")),
+                     f"{r['recognize_ms']:.0f}" if "recognize_ms" in r else ""])
+    verdicts = "\n".join(f"- {v}" for v in data["verdicts"])
+    return table(["scene", "points", "sampled", "PSORR primitives (per draw)", "decompose ms", "Open3D planes",
+                  "Open3D ms", "found", "false", "recognize ms"], rows, "lrrlrlrrrr") + "\n\n" + verdicts
