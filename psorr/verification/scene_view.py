@@ -10,7 +10,7 @@ from functools import cached_property
 import numpy as np
 import open3d as o3d
 
-from psorr.geometry.open3d_threads import single_threaded
+from psorr.geometry.support_plane import support_plane
 from psorr.sensing.resolution import grid_focal
 from psorr.types import PointCloud
 
@@ -91,16 +91,11 @@ class SceneView:
         self.down_tree = o3d.geometry.KDTreeFlann(down)
         # The supporting plane (the largest one, normal towards the sensor): no
         # part can sit below it, and ORR samples what stands on it.
-        self.support_plane = None
+        found = support_plane(down)
+        self.support_plane = None if found is None else found.plane
         keep = np.ones(len(down.points), dtype=bool)
-        if len(down.points) >= 3:
-            o3d.utility.random.seed(0)
-            with single_threaded():
-                plane, inliers = down.segment_plane(distance_threshold=0.008, ransac_n=3, num_iterations=200)
-            if len(inliers) > 0.2 * len(down.points):
-                plane = np.asarray(plane, float) / np.linalg.norm(plane[:3])
-                self.support_plane = plane if plane[3] > 0 else -plane  # origin on the positive side
-                keep[np.asarray(inliers)] = False
+        if found is not None:
+            keep[found.inliers] = False
         self._object_mask = keep
         self.icp_voxel = icp_voxel
         self._down_points = np.asarray(down.points)
