@@ -4,7 +4,8 @@ Decompose depth clouds into planes and cylinders and their primitive shape
 graph; recognise CAD-trained workpieces from it. Never imports the simulator.
 The pipeline's stages live in subpackages named after them: psorr.io,
 psorr.decomposition, psorr.library, psorr.hypotheses, psorr.verification,
-psorr.acceptance (and psorr.sensing, psorr.synthetic for scenes).
+psorr.acceptance (and psorr.sensing, psorr.synthetic for scenes); psorr.segment splits a
+table-top cloud into objects by colour and distance.
 """
 
 from psorr.acceptance.params import AcceptParams
@@ -19,6 +20,7 @@ from psorr.hypotheses.single_plane import SinglePlaneParams
 from psorr.library import ModelLibrary
 from psorr.recognize import Recognizer
 from psorr.recognize_params import Method, Recognition, RecognitionStats, RecognizeParams
+from psorr.segment import Segmentation, SegmentParams  # segment() itself: psorr.segment.segment
 from psorr.types import Detection, OrientedBox, PointCloud, Primitive, PrimitiveKind, PrimitiveShapeGraph
 
 __all__ = [
@@ -43,6 +45,8 @@ __all__ = [
     "RecognitionStats",
     "RecognizeParams",
     "Recognizer",
+    "SegmentParams",
+    "Segmentation",
     "SingleCylinderParams",
     "SinglePlaneParams",
     "SupportCropParams",

@@ -64,3 +64,39 @@ def osd_object_ids(labels: np.ndarray) -> np.ndarray:
     1 for the table (labels 1-9), label // 10 for the objects (2, 3, ...)."""
     labels = np.asarray(labels)
     return np.where(labels >= 10, labels // 10, np.where(labels >= 1, 1, 0))
+
+
+@dataclass(frozen=True)
+class ObjectSegmentScore:
+    """One labelled object against a segmentation: iou with its best-matching segment; over: a second
+    segment holds at least a tenth of it; under: its best segment draws at least a tenth of its points
+    from other objects or the background."""
+
+    object_id: int
+    iou: float
+    over: bool
+    under: bool
+
+
+def object_segment_scores(truth: np.ndarray, labels: np.ndarray, background=(0, 1),
+                          share: float = 0.1) -> list[ObjectSegmentScore]:
+    """Score segments labels (N,) (-1 for none) against truth object ids (N,); ``background`` ids are
+    not objects."""
+    truth, labels = np.asarray(truth), np.asarray(labels)
+    if truth.shape != labels.shape or truth.ndim != 1:
+        raise InvalidInputError(f"truth and labels must both be (N,), got {truth.shape} and {labels.shape}")
+    n_segments = int(labels.max()) + 1 if (labels >= 0).any() else 0
+    seg_sizes = np.bincount(labels[labels >= 0], minlength=n_segments)
+    scores = []
+    for obj in np.unique(truth[(truth >= 0) & ~np.isin(truth, background)]):
+        mine = truth == obj
+        overlap = np.bincount(labels[mine & (labels >= 0)], minlength=n_segments)
+        if n_segments == 0 or overlap.max() == 0:
+            scores.append(ObjectSegmentScore(int(obj), 0.0, False, False))
+            continue
+        best = int(np.argmax(overlap / (mine.sum() + seg_sizes - overlap)))
+        iou = overlap[best] / (mine.sum() + seg_sizes[best] - overlap[best])
+        over = np.sort(overlap)[-2] >= share * mine.sum() if n_segments > 1 else False
+        under = seg_sizes[best] - overlap[best] >= share * seg_sizes[best]
+        scores.append(ObjectSegmentScore(int(obj), float(iou), bool(over), bool(under)))
+    return scores

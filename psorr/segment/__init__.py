@@ -1,0 +1,8 @@
+"""Segmentation of a table-top cloud into objects by colour and distance (section 2.3 of the paper):
+a graph cut over colour models in CIELAB, then conditional Euclidean clustering."""
+
+from psorr.segment.colour import PALETTE, colour_name, rgb_to_lab
+from psorr.segment.pipeline import Segment, Segmentation, SegmentParams, SegmentStats, segment
+
+__all__ = ["PALETTE", "Segment", "SegmentParams", "SegmentStats", "Segmentation", "colour_name", "rgb_to_lab",
+           "segment"]
