@@ -103,6 +103,42 @@ def _decompose(args) -> int:
     return 0
 
 
+def _segment(args) -> int:
+    from psorr.io.clouds import read_cloud
+    from psorr.segment import segment
+
+    check_output(args.out, "--out", ".npy")
+    check_output(args.png, "--png", ".png")
+    cloud = read_cloud(args.cloud)
+    require_sensor_metres(cloud, str(args.cloud))
+    _log(f"read {args.cloud}: {len(cloud)} points, {int(cloud.valid_mask.sum())} finite"
+         + ("" if cloud.colors is not None else "; no colours, so segmented by distance alone"))
+    result = segment(cloud, rng=np.random.default_rng(args.seed))
+    if args.out:
+        Path(args.out).parent.mkdir(parents=True, exist_ok=True)
+        np.save(args.out, result.labels)
+        _log(f"wrote {len(result.labels)} labels to {args.out}")
+    if args.png:
+        from psorr.viz.render import save_segmentation_png
+
+        save_segmentation_png(args.png, cloud, result.labels, result.segments,
+                              title=f"{Path(args.cloud).name}: {len(result.segments)} segments, "
+                                    f"{result.stats.total_ms:.0f} ms")
+        _log(f"wrote picture to {args.png}")
+    rounded = [[round(float(v), 6) for v in s.centroid] for s in result.segments]
+    if args.json:
+        print(json.dumps({"segments": [
+            {"id": s.id, "n_points": s.n_points, "centroid": c,
+             "mean_rgb": None if s.mean_rgb is None else [round(float(v), 4) for v in s.mean_rgb]}
+            for s, c in zip(result.segments, rounded)], "stats": {"total_ms": round(result.stats.total_ms, 3)}}))
+    else:
+        print(f"{'id':>3} {'points':>7}  centroid (m)               colour")
+        for s, c in zip(result.segments, rounded):
+            print(f"{s.id:>3} {s.n_points:>7}  {' '.join(f'{v:+.3f}' for v in c):<26} {s.colour or '-'}")
+        print(f"{len(result.segments)} segments, {result.stats.total_ms:.1f} ms")
+    return 0
+
+
 def _recognize(args) -> int:
     from tqdm import tqdm
 
@@ -157,6 +193,14 @@ def build_parser() -> argparse.ArgumentParser:
                           "time grows about as its inverse square: minutes for a 640x480 cloud at 0.002")
     dec.add_argument("--seed", type=seed, default=0, help="seed of the RANSAC sampling (default 0)")
     dec.set_defaults(run=_decompose)
+    seg = sub.add_parser("segment", help="split the objects on the table of a cloud by colour and distance")
+    seg.add_argument("cloud", help="cloud file: .pcd, .ply, .xyz/.txt or .npy, metres, sensor frame")
+    seg.add_argument("--out", metavar="LABELS.npy", help="write one int64 segment per input point (-1: the table, "
+                                                         "what is off it, NaN points)")
+    seg.add_argument("--json", action="store_true", help="print one JSON line instead of a table")
+    seg.add_argument("--png", metavar="PICTURE.png", help="render the cloud coloured by segment")
+    seg.add_argument("--seed", type=seed, default=0, help="seed of the colour models' k-means (default 0)")
+    seg.set_defaults(run=_segment)
     rec = sub.add_parser("recognize", help="find CAD-trained workpieces and their poses in a depth cloud")
     rec.add_argument("models", nargs="+", metavar="MODELS",
                      help="a folder of meshes (.stl/.obj/.ply), mesh files, or a saved library (.npz); "

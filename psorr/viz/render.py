@@ -46,7 +46,14 @@ def _project(points: np.ndarray, width: int, height: int):
 def label_image(cloud: PointCloud, labels: np.ndarray, graph: PrimitiveShapeGraph,
                 width: int = 640, height: int = 480) -> tuple[np.ndarray, np.ndarray]:
     """RGB image (H, W, 3) of the cloud coloured by label, and the pixel of each point (N, 2)."""
-    colors = np.vstack([primitive_colors(graph), UNLABELLED_RGB])  # label -1 -> last row
+    return painted(cloud, labels, primitive_colors(graph), width, height)
+
+
+def painted(cloud: PointCloud, labels: np.ndarray, colors: np.ndarray, width: int = 640,
+            height: int = 480) -> tuple[np.ndarray, np.ndarray]:
+    """RGB image (H, W, 3) of the cloud, each point in its label's row of colors (L, 3) (label -1 grey),
+    and the pixel of each point (N, 2)."""
+    colors = np.vstack([colors, UNLABELLED_RGB])  # label -1 -> last row
     valid = cloud.valid_mask
     if cloud.is_organised:
         width, height = cloud.width, cloud.height
@@ -156,3 +163,38 @@ def save_detections_png(path, cloud: PointCloud, detections, library) -> Path:
     fig.savefig(path, bbox_inches="tight")
     plt.close(fig)
     return path
+
+
+def save_segmentation_png(path, cloud: PointCloud, labels: np.ndarray, segments, title: str = "") -> Path:
+    """Write the cloud with each segment (psorr.segment.Segment) in a colour of its own, numbered and
+    named by its colour, beside the cloud's own colours when it has them."""
+    path = Path(path)
+    own = np.array([plt.get_cmap("tab20")(k % 20)[:3] for k in range(len(segments))]).reshape(-1, 3)
+    image, px = painted(cloud, labels, own)
+    h, w = image.shape[:2]
+    panels = [image] if cloud.colors is None else [_true_colours(cloud, px, w, h), image]
+    fig, axes = plt.subplots(1, len(panels), figsize=(len(panels) * w / 80, h / 80 + 0.6), dpi=80, squeeze=False)
+    for ax, panel in zip(axes[0], panels):
+        ax.imshow(panel, interpolation="nearest")
+        ax.set_axis_off()
+    for seg in segments:
+        members = np.flatnonzero(labels == seg.id)
+        members = members[np.isfinite(px[members]).all(axis=1)]
+        if len(members):
+            axes[0, -1].annotate(f"{seg.id} {seg.colour or ''}", np.median(px[members], axis=0), fontsize=8,
+                                 ha="center", va="center", bbox={"fc": "white", "alpha": 0.7, "lw": 0})
+    axes[0, -1].set_title(title or f"{len(segments)} segments", fontsize=9)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, bbox_inches="tight")
+    plt.close(fig)
+    return path
+
+
+def _true_colours(cloud: PointCloud, px: np.ndarray, width: int, height: int) -> np.ndarray:
+    """The cloud drawn in its own colours at its points' pixels px (N, 2)."""
+    image = np.ones((height, width, 3))
+    valid = np.flatnonzero(cloud.valid_mask & np.isfinite(cloud.colors).all(axis=1))
+    cols = np.clip(px[valid, 0].round().astype(int), 0, width - 1)
+    rows = np.clip(px[valid, 1].round().astype(int), 0, height - 1)
+    image[rows, cols] = cloud.colors[valid]
+    return image

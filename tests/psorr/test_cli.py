@@ -159,3 +159,23 @@ def test_recognize_refuses_a_cloud_no_sensor_at_the_origin_could_see(tmp_path):
         out = _run("recognize", str(tmp_path / "never_read.stl"), str(tmp_path / name), "--json")
         assert out.returncode == 2 and out.stdout == "" and "Traceback" not in out.stderr
         assert name in out.stderr and "behind the sensor" in out.stderr and "sensor's frame" in out.stderr
+
+
+def test_segment_writes_labels_json_and_picture(tmp_path):
+    rng = np.random.default_rng(0)
+    scene = synthetic.box_on_table(rng)
+    colours = np.where(scene.cloud.labels[:, None] > 0, (0.8, 0.1, 0.1), (0.5, 0.5, 0.5))
+    cloud_path = tmp_path / "scene.pcd"
+    write_cloud(cloud_path, PointCloud(scene.cloud.points, colors=colours, width=scene.cloud.width,
+                                       height=scene.cloud.height))
+    out = _run("segment", str(cloud_path), "--out", str(tmp_path / "labels.npy"), "--json",
+               "--png", str(tmp_path / "pic.png"))
+    assert out.returncode == 0, out.stderr
+    record = json.loads(out.stdout)  # exactly one JSON line on stdout
+    assert set(record) == {"segments", "stats"} and record["stats"]["total_ms"] > 0
+    assert set(record["segments"][0]) == {"id", "n_points", "centroid", "mean_rgb"}
+    labels = np.load(tmp_path / "labels.npy")
+    assert labels.dtype == np.int64 and labels.shape == (len(scene.cloud),)
+    assert (labels[~scene.cloud.valid_mask] == -1).all()
+    assert labels.max() == len(record["segments"]) - 1
+    assert (tmp_path / "pic.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
