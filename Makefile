@@ -49,6 +49,7 @@ $(BENCH_STAMP): pyproject.toml setup.py | $(STAMP)
 
 bench: setup $(BENCH_STAMP)
 	$(BIN)/python benchmarks/decompose.py
+	$(BIN)/python benchmarks/segment_osd.py
 	$(BIN)/python benchmarks/kernels.py
 	$(BIN)/python benchmarks/osd_false_positives.py
 	$(BIN)/python benchmarks/table1.py

@@ -1,5 +1,5 @@
 """The recognition benchmarks' tables (decomposition, kernels, false detections, Table 1, compiled
-verification, peers, sensors, point density), each from its ``benchmarks/results/*.json``."""
+verification, peers, sensors, point density, colour segmentation), each from its ``benchmarks/results/*.json``."""
 
 from __future__ import annotations
 
@@ -215,3 +215,15 @@ def density() -> str:
     verdicts = "\n".join(f"- {v}" for v in data["verdicts"])
     return table(["scene", "points", "sampled", "PSORR primitives (per draw)", "decompose ms", "Open3D planes",
                   "Open3D ms", "found", "false", "recognize ms"], rows, "lrrlrlrrrr") + "\n\n" + verdicts
+
+
+# ---- colour segmentation of the OSD learn set (benchmarks/segment_osd.py) ---------------------------------------
+
+def segment_osd() -> str:
+    data = load("segment_osd")
+    rows = [[name, f"{s['iou']:.3f}", f"{s['over']:.2f}", f"{s['under']:.2f}", f"{s['median_ms']:.0f}"]
+            for name, s in data["summary"].items()]
+    rows.append(["target", ">= 0.85", "", "", "< 300"])
+    targets = ", ".join(f"{k} {'met' if v else 'missed'}" for k, v in data["targets_met"].items())
+    return (table(["method (45 clouds, 112 objects)", "mean object IoU", "over-segmented", "under-segmented",
+                   "median ms, 1 core"], rows, "lrrrr") + f"\n\nTargets: {targets}.")
