@@ -42,3 +42,11 @@ def rotation_vector(R: np.ndarray) -> np.ndarray:
     if angle > _NEAR_HALF_TURN:
         return Rotation.from_matrix(R).as_rotvec()
     return skew * (angle / (2.0 * np.sin(angle)))
+
+
+def kabsch_rotation(source: np.ndarray, target: np.ndarray) -> np.ndarray:
+    """The rotation R (3, 3) that carries the directions ``source`` (K, 3) closest onto ``target`` (K, 3)
+    in least squares (Kabsch; no reflection)."""
+    U, _, Vt = np.linalg.svd(np.asarray(source, float).T @ np.asarray(target, float))
+    D = np.diag([1.0, 1.0, np.sign(np.linalg.det(Vt.T @ U.T))])
+    return Vt.T @ D @ U.T

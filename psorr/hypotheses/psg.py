@@ -1,0 +1,178 @@
+"""PSG matching (the paper's second recognizer): scene cliques matched to model cliques, the poses
+screened by box verification, and conflicting correspondences settled by QPBO.
+
+Each pose hypothesis claims a correspondence for each of its clique's vertices: (scene primitive,
+model, model primitive). Every such correspondence is a binary node. Choosing a node earns the best box
+score among the hypotheses that claim it; two nodes of one hypothesis earn its score again when chosen
+together; two nodes that give one scene primitive to different model primitives may not both be
+chosen. What a node earns is the box score times the model's surface: the surface the hypothesis
+explains. That last term is not submodular, which is why it takes QPBO. The hypotheses whose nodes QPBO
+keeps or cannot decide go on to acceptance, best box score first.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from psorr.checks import params as check
+from psorr.hypotheses.candidates import CandidateSet
+from psorr.hypotheses.cliques import Clique, clique_poses, correspondences, graph_cliques
+from psorr.hypotheses.pose_clusters import share_out
+from psorr.hypotheses.primitive_match import RADIUS_TOLERANCE
+from psorr.hypotheses.qpbo import solve_qpbo
+from psorr.types import Primitive, PrimitiveKind, PrimitiveShapeGraph
+from psorr.verification.box_score import PrimitiveArrays, box_scores
+
+_CONFLICT = 2.0  # more than any reward a node can earn (box scores are at most 1)
+
+
+@dataclass(frozen=True)
+class PsgParams:
+    """``angle_tolerance`` (degrees) between a scene clique's normal-to-normal (or normal-to-axis)
+    angles and a model clique's; the radius as in pair matching. Poses scoring at least
+    ``min_box_score`` (with boxes thickened to ``box_thickness`` metres) take part in QPBO; the ``top``
+    of those it keeps, shared out across models, go on to acceptance."""
+
+    angle_tolerance: float = 10.0
+    min_box_score: float = 0.1
+    box_thickness: float = 0.04
+    top: int = 24
+
+    def __post_init__(self):
+        check.positive(self, "angle_tolerance", "box_thickness")
+        check.within(self, "min_box_score")
+        check.whole(self, "top")
+
+
+@dataclass(frozen=True, eq=False)
+class PsgCandidates:
+    """The candidates for acceptance, and QPBO's nodes: how many, and how many it left unlabelled."""
+
+    found: CandidateSet
+    nodes: int
+    unlabelled: int
+
+
+@dataclass(frozen=True, eq=False)
+class _Hypotheses:
+    poses: np.ndarray          # (H, 4, 4)
+    models: np.ndarray         # (H,)
+    nodes: list[tuple]         # per hypothesis, its (scene primitive, model, model primitive) correspondences
+
+
+class PsgMatcher:
+    """The library's model cliques, indexed once, matched against a scene's shape graph."""
+
+    def __init__(self, library, params: PsgParams | None = None):
+        self.params = params or PsgParams()
+        self.models = list(library.models)
+        self.model_cliques = [graph_cliques(m.graph) for m in self.models]
+        self.model_primitives = [PrimitiveArrays.of(m.graph.primitives) for m in self.models]
+        # Model surface in primitive samples (evenly spaced, so proportional to area).
+        self.model_areas = np.array([a.weight.sum() for a in self.model_primitives])
+
+    def candidates(self, graph: PrimitiveShapeGraph, max_extent: float) -> PsgCandidates:
+        """Candidates from the cliques of the scene's shape ``graph`` among primitives no longer than
+        ``max_extent`` metres (the table is no part's face)."""
+        found = self._hypotheses(graph, max_extent)
+        start = time.perf_counter()
+        prims = graph.primitives
+        scores = box_scores(self.model_primitives, found.poses, PrimitiveArrays.of(prims), self.params.box_thickness,
+                            found.models) if len(found.poses) else np.zeros(0)
+        good = np.flatnonzero(scores >= self.params.min_box_score)
+        # A node earns the scene surface its hypothesis explains, not the share of its model: a small
+        # model posed inside a large one covers more of itself than the large one, seen in part, does.
+        explained = scores * self.model_areas[found.models] if len(found.models) else scores
+        kept, n_nodes, n_unlabelled = _settled(good, explained / max(explained.max(initial=0.0), 1e-12),
+                                               found.nodes)
+        order = kept[np.argsort(-scores[kept], kind="stable")]
+        order = share_out(order, found.models, self.params.top)
+        verify_ms = (time.perf_counter() - start) * 1e3
+        return PsgCandidates(CandidateSet.chosen(found.models, found.poses, order, len(found.poses), verify_ms),
+                             n_nodes, n_unlabelled)
+
+    def _hypotheses(self, graph: PrimitiveShapeGraph, max_extent: float) -> _Hypotheses:
+        graph, table = _table_turned_over(graph, max_extent)
+        prims = graph.primitives
+        small = {k for k, p in enumerate(prims) if float(np.max(p.box.extent)) <= max_extent}
+        poses, models, nodes = [], [], []
+        for scene in graph_cliques(graph):
+            if not set(scene.vertices) <= small | {table}:
+                continue
+            for index, cliques in enumerate(self.model_cliques):
+                for model in cliques:
+                    for order in correspondences(scene, model, self.params.angle_tolerance, RADIUS_TOLERANCE):
+                        for T in self._poses(scene, order, prims, index):
+                            poses.append(T)
+                            models.append(index)
+                            nodes.append(tuple((s, index, m) for s, m in zip(scene.vertices, order)))
+        return _Hypotheses(np.array(poses).reshape(-1, 4, 4), np.array(models, dtype=np.int64), nodes)
+
+    def _poses(self, scene: Clique, order, prims, index: int) -> list[np.ndarray]:
+        """The clique's poses whose turned model normals (and axis) land within the tolerance of the
+        scene's: a mirrored vertex order fits no rotation."""
+        model_prims = [self.models[index].graph.primitives[k] for k in order]
+        scene_prims = [prims[k] for k in scene.vertices]
+        cos_tol = np.cos(np.radians(self.params.angle_tolerance))
+        out = []
+        for T in clique_poses(scene.kind, scene_prims, model_prims):
+            turned = [T[:3, :3] @ _direction(p) for p in model_prims]
+            if all(abs(t @ _direction(s)) >= cos_tol for t, s in zip(turned, scene_prims)):
+                out.append(T)
+        return out
+
+
+def _table_turned_over(graph: PrimitiveShapeGraph, max_extent: float) -> tuple[PrimitiveShapeGraph, int]:
+    """The graph with its largest plane longer than ``max_extent`` (the table) facing down, and its index
+    (-1 for none). A part rests on the table by one of its own faces, which faces down: the table is
+    that face's plane, so a part showing two faces still makes a corner with it."""
+    prims = list(graph.primitives)
+    large = [k for k, p in enumerate(prims) if p.kind is PrimitiveKind.PLANE and np.max(p.box.extent) > max_extent]
+    if not large:
+        return graph, -1
+    table = max(large, key=lambda k: prims[k].n_points)
+    flipped = tuple(-v for v in prims[table].params)
+    prims[table] = replace(prims[table], params=flipped)
+    return PrimitiveShapeGraph(tuple(prims), graph.edges), table
+
+
+def _direction(p: Primitive) -> np.ndarray:
+    return p.normal if p.kind is PrimitiveKind.PLANE else p.axis
+
+
+def _settled(good: np.ndarray, scores: np.ndarray, nodes: list[tuple]) -> tuple[np.ndarray, int, int]:
+    """The hypotheses among ``good`` that QPBO keeps or leaves undecided, the number of nodes, and how
+    many it left unlabelled."""
+    if len(good) == 0:
+        return good, 0, 0
+    index: dict[tuple, int] = {}
+    for h in good:
+        for node in nodes[h]:
+            index.setdefault(node, len(index))
+    reward = np.zeros(len(index))
+    pairs: dict[tuple[int, int], float] = {}
+    for h in good:
+        ids = [index[node] for node in nodes[h]]
+        for i in ids:
+            reward[i] = max(reward[i], scores[h])
+        for a in range(len(ids)):
+            for b in range(a + 1, len(ids)):
+                key = (min(ids[a], ids[b]), max(ids[a], ids[b]))
+                pairs[key] = pairs.get(key, 0.0) - scores[h]
+    by_scene: dict[int, list[int]] = {}
+    for node, i in index.items():
+        by_scene.setdefault(node[0], []).append(i)
+    for members in by_scene.values():  # one scene primitive, two model primitives: not both
+        for a in range(len(members)):
+            for b in range(a + 1, len(members)):
+                key = (min(members[a], members[b]), max(members[a], members[b]))
+                pairs[key] = pairs.get(key, 0.0) + _CONFLICT
+    unary = np.column_stack([np.zeros(len(index)), -reward])
+    edges = np.array(list(pairs), dtype=np.int64).reshape(-1, 2)
+    pairwise = np.column_stack([np.zeros((len(pairs), 3)), np.array(list(pairs.values()))])
+    labels = solve_qpbo(unary, edges, pairwise).labels
+    kept = [h for h in good if all(labels[index[node]] != 0 for node in nodes[h])]
+    return np.array(kept, dtype=np.int64), len(index), int((labels < 0).sum())
