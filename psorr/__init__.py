@@ -21,7 +21,15 @@ from psorr.library import ModelLibrary
 from psorr.recognize import Recognizer
 from psorr.recognize_params import Method, Recognition, RecognitionStats, RecognizeParams
 from psorr.segment import Segmentation, SegmentParams  # segment() itself: psorr.segment.segment
-from psorr.types import Detection, OrientedBox, PointCloud, Primitive, PrimitiveKind, PrimitiveShapeGraph
+from psorr.types import (
+    Detection,
+    DetectionColour,
+    OrientedBox,
+    PointCloud,
+    Primitive,
+    PrimitiveKind,
+    PrimitiveShapeGraph,
+)
 
 __all__ = [
     "AcceptParams",
@@ -29,6 +37,7 @@ __all__ = [
     "DecomposeParams",
     "Decomposition",
     "Detection",
+    "DetectionColour",
     "DetailParams",
     "InvalidInputError",
     "Method",

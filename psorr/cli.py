@@ -155,7 +155,8 @@ def _recognize(args) -> int:
                                      progress=lambda xs: tqdm(xs, desc="training", file=sys.stderr))
     _log(f"read {args.scene}: {len(cloud)} points; models {', '.join(library.names)}")
     params = RecognizeParams().for_stacked_parts() if args.stacked else RecognizeParams()
-    result = Recognizer(library, method=args.method, params=params).recognize(cloud, np.random.default_rng(args.seed))
+    recognizer = Recognizer(library, method=args.method, params=params, use_colour=args.colour)
+    result = recognizer.recognize(cloud, np.random.default_rng(args.seed))
     stats = result.stats
     if args.png:
         from psorr.viz.render import save_detections_png
@@ -165,19 +166,28 @@ def _recognize(args) -> int:
     if args.json:
         print(json.dumps({
             "detections": [{"model": d.model, "pose": [[float(v) for v in row] for row in d.T_cloud_model],
-                            "score": float(d.score)} for d in result.detections],
+                            "score": float(d.score), **_colour_record(d)} for d in result.detections],
             "stats": {"method": stats.method, "hypotheses": int(stats.hypotheses),
                       "verify_ms_per_hypothesis": float(stats.verify_ms_per_hypothesis),
                       "total_ms": float(stats.total_ms), "train_ms": float(stats.train_ms)},
         }))
     else:
-        print(f"{'model':<16} {'score':>6} {'seen':>5}  position (m)")
+        header = f"{'model':<16} {'score':>6} {'seen':>5}  position (m)"
+        print(header + "               colour" if args.colour else header)
         for d in result.detections:
             where = " ".join(f"{v:+.3f}" for v in d.T_cloud_model[:3, 3])
-            print(f"{d.model:<16} {d.score:>6.3f} {d.visible_fraction:>5.2f}  {where}")
+            colour = f"  {d.colour.name}" if d.colour else ""
+            print(f"{d.model:<16} {d.score:>6.3f} {d.visible_fraction:>5.2f}  {where}{colour}")
         print(f"{len(result.detections)} detections; {stats.method}: {stats.hypotheses} hypotheses, "
               f"{stats.verify_ms_per_hypothesis:.2f} ms verification each, {stats.total_ms:.0f} ms in all")
     return 0
+
+
+def _colour_record(detection) -> dict:
+    """The JSON fields of a detection's colour: none without --colour."""
+    if detection.colour is None:
+        return {}
+    return {"colour": detection.colour.name, "mean_rgb": [round(v, 4) for v in detection.colour.mean_rgb]}
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -216,6 +226,9 @@ def build_parser() -> argparse.ArgumentParser:
                      help="parts may lie on other objects or sit flush with them: no limit on how high a part "
                           "floats over the table, and no continuation check (by default a part whose faces "
                           "the measured surface continues past its outline is taken to be a larger object)")
+    rec.add_argument("--colour", action="store_true",
+                     help="segment the scene by colour and distance first and recognise each segment alone; "
+                          "each detection carries its segment's colour (a cloud without colours: by distance)")
     rec.set_defaults(run=_recognize)
     return parser
 

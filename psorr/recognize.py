@@ -33,12 +33,15 @@ from psorr.errors import InvalidInputError
 from psorr.hypotheses.orr import orr_hypotheses
 from psorr.hypotheses.outline import OutlineMatcher
 from psorr.hypotheses.pairs import PairCandidates
+from psorr.hypotheses.psg import PsgMatcher
 from psorr.hypotheses.single_cylinder import SingleCylinderMatcher
 from psorr.hypotheses.single_plane import SinglePlaneMatcher
 from psorr.library.models import ModelLibrary
 from psorr.library.orr_table import OrrTable
 from psorr.library.ppf import scene_oriented_points
 from psorr.recognize_params import Method, Recognition, RecognitionStats, RecognizeParams
+from psorr.segment.per_segment import coloured, segment_clouds
+from psorr.segment.pipeline import segment
 from psorr.sensing.resolution import thin_to_focal
 from psorr.types import Detection, PointCloud, PrimitiveKind
 from psorr.verification.scene_view import SceneView
@@ -47,10 +50,13 @@ _TABLE_EXTENT = 1.2  # in diameters of the largest model: a primitive larger tha
 
 
 class Recognizer:
-    """Find library models in clouds: ``Recognizer(library, method=Method.PSORR | Method.ORR).recognize(cloud)``."""
+    """Find library models in clouds: ``Recognizer(library, method=Method.PSORR | Method.ORR).recognize(cloud)``.
+
+    With ``use_colour=True`` the cloud is segmented by colour and distance first (psorr.segment), each
+    segment recognised alone, and each detection carries its segment's colour (``Detection.colour``)."""
 
     def __init__(self, library: ModelLibrary, method: Method | str = Method.PSORR,
-                 params: RecognizeParams | None = None):
+                 params: RecognizeParams | None = None, use_colour: bool = False):
         check.require_instance(library, ModelLibrary, "Recognizer()'s library",
                                "load a saved one with ModelLibrary.load(path), or train one with "
                                "ModelLibrary.from_meshes([mesh paths])")
@@ -59,7 +65,10 @@ class Recognizer:
                                    "RecognizeParams(acceptance=AcceptParams(...), ...); None for the defaults")
         if method not in tuple(Method):
             raise InvalidInputError(f"unknown method {method!r}; choose one of {[m.value for m in Method]}")
+        if not isinstance(use_colour, bool):
+            raise InvalidInputError(f"Recognizer()'s use_colour must be True or False, got {use_colour!r}")
         self.library, self.method, self.params = library, Method(method), params or RecognizeParams()
+        self.use_colour = use_colour
         self.max_diameter = max(m.diameter for m in library.models)
         p = self.params
         # Candidates of random point pairs start rougher than those of primitive pairs: PSORR's that end up
@@ -72,6 +81,7 @@ class Recognizer:
         self.single_plane = SinglePlaneMatcher(library.models, p.single_plane)
         self.single_cylinder = SingleCylinderMatcher(library.models, p.single_cylinder)
         self.outline = OutlineMatcher(library.models, p.outline) if p.outline.enabled else None
+        self.psg = PsgMatcher(library, p.psg) if self.method is Method.PSG else None
         # ORR's own table of dense model pairs, built (or read from the training cache) once per recognizer.
         self.orr_table = OrrTable.for_library(library, p.orr.table) if self.method is Method.ORR else None
 
@@ -90,9 +100,29 @@ class Recognizer:
         cloud = self._at_sensor_sampling(cloud)
         if not cloud.valid_mask.any():  # a frame the sensor measured nothing in (the arm over its lens): none here
             return Recognition((), RecognitionStats(self.method, 0, 0.0, 0.0, 0.0, self.library.train_ms))
-        view = SceneView(cloud)
-        found = self._psorr(cloud, view, rng) if self.method is Method.PSORR else self._orr(view, rng)
+        if self.use_colour:
+            return self._per_segment(cloud, rng, start)
+        found = self._find(cloud, rng)
         return Recognition(found.detections, self._stats(found, start))
+
+    def _find(self, cloud: PointCloud, rng: np.random.Generator) -> SearchResult:
+        view = SceneView(cloud)
+        if self.method is Method.ORR:
+            return self._orr(view, rng)
+        return self._psorr(cloud, view, rng) if self.method is Method.PSORR else self._psg(cloud, view, rng)
+
+    def _per_segment(self, cloud: PointCloud, rng: np.random.Generator, start: float) -> Recognition:
+        """Segment by colour and distance, recognise each segment alone, and give each detection its
+        segment's colour (psorr.segment)."""
+        detections, hypotheses, verify_ms, decomposition_ms = [], 0, 0.0, 0.0
+        for seg, alone in segment_clouds(cloud, segment(cloud, rng=rng)):
+            found = self._find(alone, rng)
+            detections += [coloured(d, seg) for d in found.detections]
+            hypotheses, verify_ms = hypotheses + found.hypotheses, verify_ms + found.verify_ms
+            decomposition_ms += found.decomposition_ms
+        stats = RecognitionStats(self.method, hypotheses, verify_ms / hypotheses if hypotheses else 0.0,
+                                 decomposition_ms, (time.perf_counter() - start) * 1e3, self.library.train_ms)
+        return Recognition(tuple(detections), stats)
 
     def refine(self, cloud: PointCloud, model: str, T_cloud_model: np.ndarray) -> Detection:
         """Judge a known pose of ``model`` in a new view, as recognition judges its candidates: ICP from
@@ -148,6 +178,22 @@ class Recognizer:
             self._single_search(view, tally, self.outline.candidates(cloud, view))
         if p.detail.fine_voxel is not None:
             self._second_look(cloud, cropped, view, margin, tally, rng)
+        return tally.result()
+
+    def _psg(self, cloud: PointCloud, view: SceneView, rng: np.random.Generator) -> SearchResult:
+        """The scene decomposed as for PSORR, its shape graph's cliques matched to the models', conflicts
+        settled by QPBO, and the poses through the same acceptance."""
+        tally = self._new_tally(view)
+        t0 = time.perf_counter()
+        margin = _TABLE_EXTENT / 2 * self.max_diameter
+        cropped = crop_to_parts(cloud, view.support_plane, margin, self.params.support_crop)
+        scene = decompose_with_leftovers(cropped, self.params.decompose, self.params.detail.leftover_voxel, rng)
+        tally.decomposition_ms += (time.perf_counter() - t0) * 1e3
+        if scene is None:
+            return tally.result()
+        found = self.psg.candidates(scene.graph, _TABLE_EXTENT * self.max_diameter)
+        self.acceptance(view, found.found.candidates, tally.claims)
+        tally.add(found.found.hypotheses, found.found.verify_ms)
         return tally.result()
 
     def _second_look(self, cloud, cropped, view, margin, tally: SearchTally, rng) -> None:

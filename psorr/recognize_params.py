@@ -13,6 +13,7 @@ from psorr.decomposition.support_crop import SupportCropParams
 from psorr.hypotheses.orr import OrrParams
 from psorr.hypotheses.outline import OutlineParams
 from psorr.hypotheses.pairs import PairParams
+from psorr.hypotheses.psg import PsgParams
 from psorr.hypotheses.single_cylinder import SingleCylinderParams
 from psorr.hypotheses.single_plane import SinglePlaneParams
 from psorr.types import Detection, Method
@@ -28,6 +29,7 @@ class RecognizeParams:
     - ``pairs``: pose hypotheses from primitive pairs, screened by box verification (PSORR);
     - ``single_plane``, ``single_cylinder``: poses from one face or one long cylinder (PSORR);
     - ``outline``: poses from a part's outline on the table, for parts too small to pair (PSORR; off by default);
+    - ``psg``: PSG matching's cliques and QPBO (``method="psg"``);
     - ``orr``: the ORR baseline's random point pairs;
     - ``acceptance``: ICP, the point check's bars, and settling detections by the pixels they explain.
     """
@@ -39,14 +41,15 @@ class RecognizeParams:
     single_plane: SinglePlaneParams = field(default_factory=SinglePlaneParams)
     single_cylinder: SingleCylinderParams = field(default_factory=SingleCylinderParams)
     outline: OutlineParams = field(default_factory=OutlineParams)
+    psg: PsgParams = field(default_factory=PsgParams)
     orr: OrrParams = field(default_factory=OrrParams)
     acceptance: AcceptParams = field(default_factory=AcceptParams)
 
     def __post_init__(self):
         for name, cls in (("decompose", DecomposeParams), ("support_crop", SupportCropParams),
                           ("detail", DetailParams), ("pairs", PairParams), ("single_plane", SinglePlaneParams),
-                          ("single_cylinder", SingleCylinderParams), ("outline", OutlineParams), ("orr", OrrParams),
-                          ("acceptance", AcceptParams)):
+                          ("single_cylinder", SingleCylinderParams), ("outline", OutlineParams), ("psg", PsgParams),
+                          ("orr", OrrParams), ("acceptance", AcceptParams)):
             check.instance(self, name, cls)
 
     def for_stacked_parts(self) -> RecognizeParams:

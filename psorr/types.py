@@ -88,10 +88,11 @@ class PointCloud:
 
 
 class Method(StrEnum):
-    """Where recognition's hypotheses come from: PSORR's pairs of scene primitives, or ORR's random pairs of
-    points (Papazov and Burschka's baseline)."""
+    """Where recognition's hypotheses come from: PSORR's pairs of scene primitives, PSG's matched cliques of
+    the primitive shape graph, or ORR's random pairs of points (Papazov and Burschka's baseline)."""
 
     PSORR = "psorr"
+    PSG = "psg"
     ORR = "orr"
 
 
@@ -227,6 +228,15 @@ class PrimitiveShapeGraph:
         return sorted({j for i, j in self.edges if i == index} | {i for i, j in self.edges if j == index})
 
 
+@dataclass(frozen=True)
+class DetectionColour:
+    """The colour of the segment a detection was found in: ``name`` from psorr.segment's palette and
+    ``mean_rgb`` (r, g, b) in [0, 1]."""
+
+    name: str
+    mean_rgb: tuple[float, float, float]
+
+
 @dataclass(frozen=True, eq=False)
 class Detection:
     """One recognised workpiece instance.
@@ -242,6 +252,8 @@ class Detection:
             small features that tell them apart were hidden or seen edge-on. Empty when the view
             settled it, or the model has no near-symmetry. A robot can look again from elsewhere
             (``Recognizer.refine`` judges given poses in a new view).
+        colour: with ``Recognizer(..., use_colour=True)``, the colour of the segment it was found in;
+            otherwise None.
     """
 
     model: str
@@ -249,6 +261,7 @@ class Detection:
     score: float
     visible_fraction: float = 0.0
     alternatives: tuple = ()
+    colour: DetectionColour | None = None
 
     def __post_init__(self):
         object.__setattr__(self, "T_cloud_model", rigid_pose(self.T_cloud_model, "Detection.T_cloud_model"))

@@ -16,6 +16,16 @@ def _run(*args):
     return subprocess.run([sys.executable, "-m", "psorr.cli", *args], capture_output=True, text=True, timeout=120)
 
 
+def _labels_and_picture_written(folder, cloud, n_items: int) -> None:
+    """labels.npy holds one int64 per point of ``cloud`` (-1 for NaN points) up to n_items - 1, and pic.png
+    is a PNG."""
+    labels = np.load(folder / "labels.npy")
+    assert labels.dtype == np.int64 and labels.shape == (len(cloud),)
+    assert (labels[~cloud.valid_mask] == -1).all()
+    assert labels.max() == n_items - 1
+    assert (folder / "pic.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
 def test_decompose_writes_labels_json_and_picture(tmp_path):
     scene = synthetic.box_on_table(np.random.default_rng(0))
     cloud_path = tmp_path / "scene.pcd"
@@ -28,11 +38,7 @@ def test_decompose_writes_labels_json_and_picture(tmp_path):
     assert record["stats"]["total_ms"] > 0
     first = record["primitives"][0]
     assert set(first) >= {"id", "kind", "params", "n_points", "centroid"}
-    labels = np.load(tmp_path / "labels.npy")
-    assert labels.dtype == np.int64 and labels.shape == (len(scene.cloud),)
-    assert (labels[~scene.cloud.valid_mask] == -1).all()
-    assert labels.max() == len(record["primitives"]) - 1
-    assert (tmp_path / "pic.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    _labels_and_picture_written(tmp_path, scene.cloud, len(record["primitives"]))
 
 
 def test_bad_file_gives_one_line_error_not_a_traceback(tmp_path):
@@ -174,8 +180,19 @@ def test_segment_writes_labels_json_and_picture(tmp_path):
     record = json.loads(out.stdout)  # exactly one JSON line on stdout
     assert set(record) == {"segments", "stats"} and record["stats"]["total_ms"] > 0
     assert set(record["segments"][0]) == {"id", "n_points", "centroid", "mean_rgb"}
-    labels = np.load(tmp_path / "labels.npy")
-    assert labels.dtype == np.int64 and labels.shape == (len(scene.cloud),)
-    assert (labels[~scene.cloud.valid_mask] == -1).all()
-    assert labels.max() == len(record["segments"]) - 1
-    assert (tmp_path / "pic.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    _labels_and_picture_written(tmp_path, scene.cloud, len(record["segments"]))
+
+
+def test_recognize_with_colour_reports_each_detection_s_colour(tmp_path):
+    from coloured_scenes import BLUE, RED, two_boxes
+    from part_meshes import box
+
+    cloud, _ = two_boxes((RED, BLUE), gap=0.0)
+    write_cloud(tmp_path / "scene.pcd", cloud)
+    (tmp_path / "models").mkdir()
+    box((0.10, 0.06, 0.05)).export(tmp_path / "models" / "box.stl")
+    out = _run("recognize", str(tmp_path / "models"), str(tmp_path / "scene.pcd"), "--colour", "--json")
+    assert out.returncode == 0, out.stderr
+    detections = json.loads(out.stdout)["detections"]
+    assert sorted(d["colour"] for d in detections) == ["blue", "red"]
+    assert all(len(d["mean_rgb"]) == 3 for d in detections)

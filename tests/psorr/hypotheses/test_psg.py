@@ -1,0 +1,87 @@
+"""PSG matching (psorr.hypotheses.cliques and psg): clique features, and a chassis found by method psg."""
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from psorr.hypotheses.cliques import CliqueKind, clique_poses, correspondences, graph_cliques
+from psorr.recognize import Recognizer
+from psorr.synthetic.catalog import load_catalog, symmetric_add
+from psorr.synthetic.workpiece_scenes import workpiece_scene
+from psorr.types import PrimitiveKind, PrimitiveShapeGraph
+
+
+def _moved(graph: PrimitiveShapeGraph, T: np.ndarray) -> PrimitiveShapeGraph:
+    """The graph's primitives carried by the rigid motion T (4, 4)."""
+    R, t = T[:3, :3], T[:3, 3]
+    prims = []
+    for p in graph.primitives:
+        if p.kind is PrimitiveKind.PLANE:
+            n = R @ p.normal
+            params = (*n, p.offset - n @ t)
+        else:
+            params = (*(R @ p.axis_point + t), *(R @ p.axis), p.radius)
+        prims.append(replace(p, params=tuple(float(v) for v in params)))
+    return PrimitiveShapeGraph(tuple(prims), graph.edges)
+
+
+def _carries(P: np.ndarray, model, scene) -> bool:
+    """Does the pose P (4, 4) put each model primitive on its scene primitive (planes: the same plane;
+    cylinders: the same axis line), to 1e-3 rad and 0.1 mm? A cylinder standing square on a plane fixes
+    no turn about its axis: the pose then takes one from the axis alone, and the plane's normal, a
+    few thousandths of a degree off the axis, lands that far off."""
+    R, t = P[:3, :3], P[:3, 3]
+    for m, s in zip(model, scene):
+        if m.kind is PrimitiveKind.PLANE:
+            on_plane = R @ (-m.offset * m.normal) + t
+            if not (np.allclose(R @ m.normal, s.normal, atol=1e-3) and abs(s.normal @ on_plane + s.offset) < 1e-4):
+                return False
+        else:
+            off_axis = R @ m.axis_point + t - s.axis_point
+            if abs(abs(R @ m.axis @ s.axis) - 1) > 1e-6 or np.linalg.norm(np.cross(off_axis, s.axis)) > 1e-4:
+                return False
+    return True
+
+
+def _random_motion(rng) -> np.ndarray:
+    q = rng.normal(size=4)
+    q /= np.linalg.norm(q)
+    w, x, y, z = q
+    T = np.eye(4)
+    T[:3, :3] = [[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                 [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                 [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]
+    T[:3, 3] = rng.uniform(-0.5, 0.5, 3)
+    return T
+
+
+@pytest.mark.parametrize("part", ["chassis", "flanged_hub"])
+def test_clique_features_are_invariant_to_rigid_motion(library, part):
+    graph = library.model(part).graph
+    cliques = graph_cliques(graph)
+    kinds = {c.kind for c in cliques}
+    assert CliqueKind.PLANES in kinds or CliqueKind.PLANE_CYLINDER in kinds
+    for seed in range(3):
+        T = _random_motion(np.random.default_rng(seed))
+        moved = graph_cliques(_moved(graph, T))
+        assert [c.vertices for c in moved] == [c.vertices for c in cliques]
+        for a, b in zip(cliques, moved):
+            assert np.allclose(a.feature, b.feature, atol=1e-6)
+            # and the match gives a pose that carries the clique's primitives onto the moved ones
+            assert a.vertices in correspondences(b, a, 1e-3, 1e-6)
+            model = [graph.primitives[k] for k in a.vertices]
+            scene = [_moved(graph, T).primitives[k] for k in b.vertices]
+            assert any(_carries(P, model, scene) for P in clique_poses(a.kind, scene, model))
+
+
+def test_method_psg_finds_a_single_chassis(library):
+    catalog = load_catalog()
+    scene = workpiece_scene(np.random.default_rng(3), {"chassis": catalog["chassis"].load_mesh()}, ["chassis"])
+    recognition = Recognizer(library, "psg").recognize(scene.cloud, np.random.default_rng(0))
+    chassis = [d for d in recognition.detections if d.model == "chassis"]
+    assert len(chassis) == 1 and len(recognition.detections) == 1
+    model = library.model("chassis")
+    truth = scene.instances[0].T_camera_model
+    assert symmetric_add(model.points, chassis[0].T_cloud_model, truth, catalog["chassis"]) < 0.1 * model.diameter
+    assert recognition.stats.method == "psg" and recognition.stats.hypotheses > 0
