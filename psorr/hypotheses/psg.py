@@ -19,13 +19,16 @@ import numpy as np
 
 from psorr.checks import params as check
 from psorr.hypotheses.candidates import CandidateSet
-from psorr.hypotheses.cliques import Clique, clique_poses, correspondences, graph_cliques
+from psorr.hypotheses.cliques import Clique, CliqueKind, clique_poses, correspondences, graph_cliques
+from psorr.hypotheses.corners import CornerIndex
+from psorr.hypotheses.pairs import PairParams
 from psorr.hypotheses.pose_clusters import share_out
 from psorr.hypotheses.primitive_match import RADIUS_TOLERANCE
 from psorr.hypotheses.qpbo import solve_qpbo
 from psorr.types import Primitive, PrimitiveKind, PrimitiveShapeGraph
 from psorr.verification.box_score import PrimitiveArrays, box_scores
 
+_PAIRS = PairParams()
 _CONFLICT = 2.0  # more than any reward a node can earn (box scores are at most 1)
 
 
@@ -33,16 +36,19 @@ _CONFLICT = 2.0  # more than any reward a node can earn (box scores are at most 
 class PsgParams:
     """``angle_tolerance`` (degrees) between a scene clique's normal-to-normal (or normal-to-axis)
     angles and a model clique's; the radius as in pair matching. Poses scoring at least
-    ``min_box_score`` (with boxes thickened to ``box_thickness`` metres) take part in QPBO; the ``top``
-    of those it keeps, shared out across models, go on to acceptance."""
+    ``min_box_score`` (with boxes thickened to ``box_thickness`` metres) take part in QPBO; of those it
+    keeps, one of each group within ``same_place`` metres (PSORR's vote cell) and the angle tolerance,
+    the ``top`` shared out across models, go on to acceptance."""
 
     angle_tolerance: float = 10.0
-    min_box_score: float = 0.1
-    box_thickness: float = 0.04
-    top: int = 24
+    # PSORR's own screening: the same box test, vote cell and number of poses for ICP.
+    min_box_score: float = _PAIRS.min_box_score
+    box_thickness: float = _PAIRS.box_thickness
+    same_place: float = _PAIRS.cluster_cell
+    top: int = _PAIRS.refine_top
 
     def __post_init__(self):
-        check.positive(self, "angle_tolerance", "box_thickness")
+        check.positive(self, "angle_tolerance", "box_thickness", "same_place")
         check.within(self, "min_box_score")
         check.whole(self, "top")
 
@@ -70,6 +76,7 @@ class PsgMatcher:
         self.params = params or PsgParams()
         self.models = list(library.models)
         self.model_cliques = [graph_cliques(m.graph) for m in self.models]
+        self.corners = CornerIndex(self.models, self.model_cliques)
         self.model_primitives = [PrimitiveArrays.of(m.graph.primitives) for m in self.models]
         # Model surface in primitive samples (evenly spaced, so proportional to area).
         self.model_areas = np.array([a.weight.sum() for a in self.model_primitives])
@@ -89,7 +96,7 @@ class PsgMatcher:
         kept, n_nodes, n_unlabelled = _settled(good, explained / max(explained.max(initial=0.0), 1e-12),
                                                found.nodes)
         order = kept[np.argsort(-scores[kept], kind="stable")]
-        order = share_out(order, found.models, self.params.top)
+        order = share_out(_distinct(order, found.poses, found.models, self.params), found.models, self.params.top)
         verify_ms = (time.perf_counter() - start) * 1e3
         return PsgCandidates(CandidateSet.chosen(found.models, found.poses, order, len(found.poses), verify_ms),
                              n_nodes, n_unlabelled)
@@ -98,10 +105,13 @@ class PsgMatcher:
         graph, table = _table_turned_over(graph, max_extent)
         prims = graph.primitives
         small = {k for k, p in enumerate(prims) if float(np.max(p.box.extent)) <= max_extent}
-        poses, models, nodes = [], [], []
-        for scene in graph_cliques(graph):
-            if not set(scene.vertices) <= small | {table}:
-                continue
+        scene_cliques = [c for c in graph_cliques(graph) if set(c.vertices) <= small | {table}]
+        corners = self.corners.match([c for c in scene_cliques if c.kind is CliqueKind.PLANES], prims,
+                                     self.params.angle_tolerance)
+        poses, models = list(corners.poses), corners.owners.tolist()
+        nodes = [tuple(zip(s.tolist(), [o] * 3, m.tolist()))
+                 for s, o, m in zip(corners.scene_vertices, models, corners.model_vertices)]
+        for scene in (c for c in scene_cliques if c.kind is CliqueKind.PLANE_CYLINDER):
             for index, cliques in enumerate(self.model_cliques):
                 for model in cliques:
                     for order in correspondences(scene, model, self.params.angle_tolerance, RADIUS_TOLERANCE):
@@ -137,6 +147,19 @@ def _table_turned_over(graph: PrimitiveShapeGraph, max_extent: float) -> tuple[P
     flipped = tuple(-v for v in prims[table].params)
     prims[table] = replace(prims[table], params=flipped)
     return PrimitiveShapeGraph(tuple(prims), graph.edges), table
+
+
+def _distinct(order: np.ndarray, poses: np.ndarray, models: np.ndarray, params: PsgParams) -> list[int]:
+    """``order`` without the poses that repeat a better one of the same model (within ``same_place`` metres
+    and the angle tolerance): a part's corners all give its pose, and ICP need fit it once."""
+    kept: list[int] = []
+    cos_tol = np.cos(np.radians(params.angle_tolerance))
+    for k in order:
+        R, t = poses[k, :3, :3], poses[k, :3, 3]
+        if not any(models[j] == models[k] and np.linalg.norm(poses[j, :3, 3] - t) < params.same_place
+                   and (np.trace(poses[j, :3, :3].T @ R) - 1) / 2 >= cos_tol for j in kept):
+            kept.append(int(k))
+    return kept
 
 
 def _direction(p: Primitive) -> np.ndarray:

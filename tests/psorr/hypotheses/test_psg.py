@@ -85,3 +85,21 @@ def test_method_psg_finds_a_single_chassis(library):
     truth = scene.instances[0].T_camera_model
     assert symmetric_add(model.points, chassis[0].T_cloud_model, truth, catalog["chassis"]) < 0.1 * model.diameter
     assert recognition.stats.method == "psg" and recognition.stats.hypotheses > 0
+
+
+def test_the_corner_index_finds_the_motion_of_a_moved_model(library):
+    from psorr.hypotheses.corners import CornerIndex
+
+    models = list(library.models)
+    index = CornerIndex(models, [graph_cliques(m.graph) for m in models])
+    chassis = [m.name for m in models].index("chassis")
+    T = _random_motion(np.random.default_rng(7))
+    moved = _moved(library.model("chassis").graph, T)
+    corners = [c for c in graph_cliques(moved) if c.kind is CliqueKind.PLANES]
+    found = index.match(corners, moved.primitives, 1.0)
+    own = found.owners == chassis
+    assert own.any()
+    # Each scene corner matched in its own vertex order gives the motion itself.
+    same = own & (found.scene_vertices == found.model_vertices).all(axis=1)
+    assert same.sum() == len(corners)
+    assert np.allclose(found.poses[same], T, atol=1e-6)
