@@ -55,6 +55,7 @@ bench: setup $(BENCH_STAMP)
 	$(BIN)/python benchmarks/table1.py
 	$(BIN)/python benchmarks/verify_compiled.py
 	$(BIN)/python benchmarks/peers.py
+	$(BIN)/python benchmarks/psg.py
 	$(BIN)/python benchmarks/generalization.py
 	$(BIN)/python benchmarks/sensors.py
 	$(BIN)/python benchmarks/density.py

@@ -20,7 +20,6 @@ same recall at every resolution.
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import time
 from pathlib import Path
@@ -29,6 +28,7 @@ import _single_core  # noqa: F401  (must precede numpy)
 import numpy as np
 from decompose import open3d_plane_loop
 from peer_common import catalog_library, clutter_scene, grade
+from report_files import write_report
 from tqdm import tqdm
 
 from psorr.decomposition import DecomposeParams, decompose
@@ -152,11 +152,7 @@ def report(rows: list[dict], out: Path) -> None:
                                                if len(set(recall.values())) == 1 else
                                                "finds or false detections differ between resolutions"))
     lines += ["", *[f"- {v}" for v in verdicts]]
-    text = "\n".join(lines)
-    print(text)
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "density.md").write_text(text + "\n")
-    (out / "density.json").write_text(json.dumps({"rows": rows, "verdicts": verdicts}, indent=1) + "\n")
+    write_report(out, "density", lines, {"rows": rows, "verdicts": verdicts})
     plot(rows, out / "density.png")
 
 

@@ -12,7 +12,6 @@ IoU of at least 0.85, above the peer's, in under 300 ms a cloud.
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import time
 from pathlib import Path
@@ -20,6 +19,7 @@ from pathlib import Path
 import _single_core  # noqa: F401  (must precede numpy)
 import numpy as np
 import open3d as o3d
+from report_files import write_report
 from tqdm import tqdm
 
 from psorr.geometry.open3d_threads import single_threaded
@@ -91,12 +91,7 @@ def report(rows: list[dict], out: Path) -> None:
         lines.append(f"| {name} | {s['iou']:.3f} | {s['over']:.2f} | {s['under']:.2f} | {s['median_ms']:.0f} |")
     lines.append(f"| target | >= {TARGETS['iou']} | | | < {TARGETS['median_ms']:.0f} |")
     lines += ["", "targets: " + ", ".join(f"{k} {'met' if v else 'MISSED'}" for k, v in met.items())]
-    text = "\n".join(lines)
-    print(text)
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "segment_osd.md").write_text(text + "\n")
-    (out / "segment_osd.json").write_text(json.dumps({"summary": summary, "targets_met": met, "scenes": rows},
-                                                     indent=1) + "\n")
+    write_report(out, "segment_osd", lines, {"summary": summary, "targets_met": met, "scenes": rows})
 
 
 def main(argv=None) -> int:

@@ -1,5 +1,5 @@
 """The recognition benchmarks' tables (decomposition, kernels, false detections, Table 1, compiled
-verification, peers, sensors, point density, colour segmentation), each from its ``benchmarks/results/*.json``."""
+verification, peers, sensors, point density, colour segmentation, PSG), each from its ``benchmarks/results/*.json``."""
 
 from __future__ import annotations
 
@@ -227,3 +227,18 @@ def segment_osd() -> str:
     targets = ", ".join(f"{k} {'met' if v else 'missed'}" for k, v in data["targets_met"].items())
     return (table(["method (45 clouds, 112 objects)", "mean object IoU", "over-segmented", "under-segmented",
                    "median ms, 1 core"], rows, "lrrrr") + f"\n\nTargets: {targets}.")
+
+
+# ---- PSG matching against PSORR (benchmarks/psg.py) -------------------------------------------------------------
+
+def psg() -> str:
+    data = load("psg")
+    rows = []
+    for r in data["rows"]:
+        a, b = r["psorr"], r["psg"]
+        rows.append([r["model"], str(r["planes"]), str(r["cylinders"]), f"{a['found']}/{r['seeds']}",
+                     f"{statistics.median(a['ms']):.0f}", f"{b['found']}/{r['seeds']}", str(b["false"]),
+                     f"{statistics.median(b['ms']):.0f}"])
+    verdicts = "\n".join(f"- {v}" for v in data["verdicts"])
+    return table(["model", "planes", "cylinders", "PSORR found", "PSORR ms", "PSG found", "PSG false", "PSG ms"],
+                 rows, "lrrrrrrr") + "\n\n" + verdicts
