@@ -169,7 +169,9 @@ def _recognize(args) -> int:
                             "score": float(d.score), **_colour_record(d)} for d in result.detections],
             "stats": {"method": stats.method, "hypotheses": int(stats.hypotheses),
                       "verify_ms_per_hypothesis": float(stats.verify_ms_per_hypothesis),
-                      "total_ms": float(stats.total_ms), "train_ms": float(stats.train_ms)},
+                      "total_ms": float(stats.total_ms), "train_ms": float(stats.train_ms),
+                      **({"qpbo_nodes": stats.qpbo_nodes, "qpbo_unlabelled": stats.qpbo_unlabelled}
+                         if stats.method == "psg" else {})},
         }))
     else:
         header = f"{'model':<16} {'score':>6} {'seen':>5}  position (m)"

@@ -114,15 +114,14 @@ class Recognizer:
     def _per_segment(self, cloud: PointCloud, rng: np.random.Generator, start: float) -> Recognition:
         """Segment by colour and distance, recognise each segment alone, and give each detection its
         segment's colour (psorr.segment)."""
-        detections, hypotheses, verify_ms, decomposition_ms = [], 0, 0.0, 0.0
+        detections, results = [], []
         for seg, alone in segment_clouds(cloud, segment(cloud, rng=rng)):
-            found = self._find(alone, rng)
-            detections += [coloured(d, seg) for d in found.detections]
-            hypotheses, verify_ms = hypotheses + found.hypotheses, verify_ms + found.verify_ms
-            decomposition_ms += found.decomposition_ms
-        stats = RecognitionStats(self.method, hypotheses, verify_ms / hypotheses if hypotheses else 0.0,
-                                 decomposition_ms, (time.perf_counter() - start) * 1e3, self.library.train_ms)
-        return Recognition(tuple(detections), stats)
+            results.append(self._find(alone, rng))
+            detections += [coloured(d, seg) for d in results[-1].detections]
+        total = SearchResult(tuple(detections), *(sum(getattr(r, name) for r in results) for name in
+                                                  ("hypotheses", "verify_ms", "decomposition_ms", "qpbo_nodes",
+                                                   "qpbo_unlabelled")))
+        return Recognition(total.detections, self._stats(total, start))
 
     def refine(self, cloud: PointCloud, model: str, T_cloud_model: np.ndarray) -> Detection:
         """Judge a known pose of ``model`` in a new view, as recognition judges its candidates: ICP from
@@ -149,7 +148,8 @@ class Recognizer:
         # No hypothesis, no verification to report: the cost of screening none is no cost per hypothesis.
         per_hypothesis = found.verify_ms / found.hypotheses if found.hypotheses else 0.0
         return RecognitionStats(self.method, found.hypotheses, per_hypothesis, found.decomposition_ms,
-                                (time.perf_counter() - start) * 1e3, self.library.train_ms)
+                                (time.perf_counter() - start) * 1e3, self.library.train_ms, found.qpbo_nodes,
+                                found.qpbo_unlabelled)
 
     def _new_tally(self, view: SceneView) -> SearchTally:
         return SearchTally(PixelClaims(view.n_blocks, self.params.acceptance.max_shared_pixels))
@@ -194,6 +194,7 @@ class Recognizer:
         found = self.psg.candidates(scene.graph, _TABLE_EXTENT * self.max_diameter)
         self.acceptance(view, found.found.candidates, tally.claims)
         tally.add(found.found.hypotheses, found.found.verify_ms)
+        tally.qpbo_nodes, tally.qpbo_unlabelled = found.nodes, found.unlabelled
         return tally.result()
 
     def _second_look(self, cloud, cropped, view, margin, tally: SearchTally, rng) -> None:

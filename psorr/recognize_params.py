@@ -61,7 +61,9 @@ class RecognizeParams:
 @dataclass(frozen=True)
 class RecognitionStats:
     """What a recognize() call cost: ``hypotheses`` screened, verification ms per hypothesis, decomposition
-    and total ms (total excludes training), and the library's training ms."""
+    and total ms (total excludes training), and the library's training ms. With PSG, also QPBO's nodes
+    (correspondences) and how many of them it left unlabelled: undecided by roof duality (their
+    persistency unknown); those poses go on to acceptance too."""
 
     method: Method
     hypotheses: int
@@ -69,6 +71,8 @@ class RecognitionStats:
     decomposition_ms: float
     total_ms: float
     train_ms: float
+    qpbo_nodes: int = 0
+    qpbo_unlabelled: int = 0
 
 
 @dataclass(frozen=True)

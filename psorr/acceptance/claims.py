@@ -113,12 +113,15 @@ class PixelClaims:
 @dataclass(frozen=True, eq=False)
 class SearchResult:
     """What one recognize() call found, in the order accepted, and what it cost: hypotheses screened, the
-    ms their screening took, and the ms spent decomposing the scene."""
+    ms their screening took, and the ms spent decomposing the scene; for PSG, QPBO's nodes and how many
+    it left unlabelled."""
 
     detections: tuple[Detection, ...]
     hypotheses: int
     verify_ms: float
     decomposition_ms: float
+    qpbo_nodes: int = 0
+    qpbo_unlabelled: int = 0
 
 
 @dataclass
@@ -130,6 +133,8 @@ class SearchTally:
     decomposition_ms: float = 0.0
     hypotheses: int = 0
     verify_ms: float = 0.0
+    qpbo_nodes: int = 0
+    qpbo_unlabelled: int = 0
 
     @property
     def detections(self) -> list[Detection]:
@@ -140,7 +145,8 @@ class SearchTally:
         self.verify_ms += verify_ms
 
     def result(self) -> SearchResult:
-        return SearchResult(tuple(self.detections), self.hypotheses, self.verify_ms, self.decomposition_ms)
+        return SearchResult(tuple(self.detections), self.hypotheses, self.verify_ms, self.decomposition_ms,
+                            self.qpbo_nodes, self.qpbo_unlabelled)
 
 
 def _weight(score: float, clean: float | None, n_blocks: int) -> float:

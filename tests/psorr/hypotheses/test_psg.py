@@ -85,6 +85,8 @@ def test_method_psg_finds_a_single_chassis(library):
     truth = scene.instances[0].T_camera_model
     assert symmetric_add(model.points, chassis[0].T_cloud_model, truth, catalog["chassis"]) < 0.1 * model.diameter
     assert recognition.stats.method == "psg" and recognition.stats.hypotheses > 0
+    # QPBO's nodes are counted, and it left at most all of them undecided.
+    assert 0 < recognition.stats.qpbo_nodes and 0 <= recognition.stats.qpbo_unlabelled <= recognition.stats.qpbo_nodes
 
 
 def test_the_corner_index_finds_the_motion_of_a_moved_model(library):
