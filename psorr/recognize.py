@@ -69,6 +69,8 @@ class Recognizer:
             raise InvalidInputError(f"Recognizer()'s use_colour must be True or False, got {use_colour!r}")
         self.library, self.method, self.params = library, Method(method), params or RecognizeParams()
         self.use_colour = use_colour
+        # recognize() thins a finer cloud once, on entry; the decompositions of what it thinned need not look again.
+        self.scene_decompose = replace(self.params.decompose, sensor_focal=None)
         self.max_diameter = max(m.diameter for m in library.models)
         p = self.params
         # Candidates of random point pairs start rougher than those of primitive pairs: PSORR's that end up
@@ -140,9 +142,10 @@ class Recognizer:
     def _at_sensor_sampling(self, cloud: PointCloud) -> PointCloud:
         """The cloud thinned to the sampling the thresholds suit, when it is finer (a 3M-point
         structured-light frame); a Kinect-v1-like cloud as it is (docs/decisions/0050)."""
-        if not self.params.decompose.sensor_noise:
+        focal = self.params.decompose.sensor_focal
+        if not self.params.decompose.sensor_noise or focal is None:
             return cloud
-        return thin_to_focal(cloud, self.params.decompose.sensor_focal).cloud
+        return thin_to_focal(cloud, focal).cloud
 
     def _stats(self, found: SearchResult, start: float) -> RecognitionStats:
         # No hypothesis, no verification to report: the cost of screening none is no cost per hypothesis.
@@ -169,7 +172,7 @@ class Recognizer:
         # table larger than any model, so it still is not paired as a part's face.
         margin = _TABLE_EXTENT / 2 * self.max_diameter
         cropped = crop_to_parts(cloud, view.support_plane, margin, p.support_crop)
-        scene = decompose_with_leftovers(cropped, p.decompose, p.detail.leftover_voxel, rng)
+        scene = decompose_with_leftovers(cropped, self.scene_decompose, p.detail.leftover_voxel, rng)
         tally.decomposition_ms += (time.perf_counter() - t0) * 1e3
         if scene is None:  # too sparse to decompose: nothing to find (as ORR says)
             return tally.result()
@@ -187,7 +190,7 @@ class Recognizer:
         t0 = time.perf_counter()
         margin = _TABLE_EXTENT / 2 * self.max_diameter
         cropped = crop_to_parts(cloud, view.support_plane, margin, self.params.support_crop)
-        scene = decompose_with_leftovers(cropped, self.params.decompose, self.params.detail.leftover_voxel, rng)
+        scene = decompose_with_leftovers(cropped, self.scene_decompose, self.params.detail.leftover_voxel, rng)
         tally.decomposition_ms += (time.perf_counter() - t0) * 1e3
         if scene is None:
             return tally.result()
@@ -207,7 +210,7 @@ class Recognizer:
         t0 = time.perf_counter()
         # The standing points that are explained are gone; the table stays, for the crop's band.
         left = crop_to_parts(left, view.support_plane, margin, p.support_crop)
-        fine = decompose_with_leftovers(left, replace(p.decompose, voxel_size=p.detail.fine_voxel), None, rng)
+        fine = decompose_with_leftovers(left, replace(self.scene_decompose, voxel_size=p.detail.fine_voxel), None, rng)
         tally.decomposition_ms += (time.perf_counter() - t0) * 1e3
         if fine is not None:
             self._search(cloud, view, fine, tally)

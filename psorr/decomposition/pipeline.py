@@ -36,7 +36,7 @@ class DecomposeParams:
     voxel_size: float = 0.012
     k_neighbours: int = 8
     sensor_noise: bool = True          # False: one threshold for all depths (CAD samples), and no thinning
-    sensor_focal: float = 525.0        # px: a sensor cloud sampled finer is thinned to this (Kinect v1) sampling
+    sensor_focal: float | None = 525.0  # px: a sensor cloud sampled finer is thinned to this (Kinect v1) sampling
     inlier_sigmas: float = 2.5         # inlier distance = max(min_inlier_distance, this x sigma(z))
     min_inlier_distance: float = 0.003
     max_normal_angle_deg: float = 25.0
@@ -57,8 +57,9 @@ class DecomposeParams:
     point_check: float = 2.0           # final per-point distance test, in inlier distances
 
     def __post_init__(self):
-        check.positive(self, "voxel_size", "sensor_focal", "inlier_sigmas", "min_inlier_distance", "null_cost",
-                       "max_distance_ratio", "adjacency_gap", "point_check")
+        check.positive(self, "voxel_size", "inlier_sigmas", "min_inlier_distance", "null_cost", "max_distance_ratio",
+                       "adjacency_gap", "point_check")
+        check.positive(self, "sensor_focal", optional=True)  # None: never thinned (a cloud thinned already)
         check.whole(self, "k_neighbours", "min_points", "ransac_candidates", "ransac_sample",
                     "ransac_accept_per_round", "ransac_patience", "max_primitives", "max_passes")
         check.flag(self, "sensor_noise", "cylinders")
