@@ -44,9 +44,10 @@ def rotation_vector(R: np.ndarray) -> np.ndarray:
     return skew * (angle / (2.0 * np.sin(angle)))
 
 
-def kabsch_rotation(source: np.ndarray, target: np.ndarray) -> np.ndarray:
-    """The rotation R (3, 3) that carries the directions ``source`` (K, 3) closest onto ``target`` (K, 3)
-    in least squares (Kabsch; no reflection)."""
-    U, _, Vt = np.linalg.svd(np.asarray(source, float).T @ np.asarray(target, float))
-    D = np.diag([1.0, 1.0, np.sign(np.linalg.det(Vt.T @ U.T))])
-    return Vt.T @ D @ U.T
+def kabsch_rotations(source: np.ndarray, target: np.ndarray) -> np.ndarray:
+    """The rotations R (K, 3, 3) that carry the directions ``source`` (K, N, 3) closest onto ``target``
+    (K, N, 3), set by set, in least squares (Kabsch; no reflection)."""
+    U, _, Vt = np.linalg.svd(np.einsum("kij,kil->kjl", source, target))
+    D = np.repeat(np.eye(3)[None], len(U), axis=0)
+    D[:, 2, 2] = np.sign(np.linalg.det(np.einsum("kji,klj->kil", Vt, U)))
+    return np.einsum("kji,kjl,kml->kim", Vt, D, U)

@@ -4,23 +4,21 @@ second recognizer, section 2.2).
 Two kinds of clique fix a pose on their own:
 
 - three mutually adjacent planes whose normals span space (a box's corner): the feature is the three
-  pairwise angles between the normals, in the clique's vertex order; the pose aligns the normals and
-  the planes' common point;
-- a plane and an adjacent cylinder: the feature is the cylinder's radius and the angle between the
-  plane's normal and the axis; the pose aligns the normal, the axis and the axis line, and takes the
-  position along the axis from where the axis meets the plane, or, for an axis along the plane, from
-  the cylinders' box centres.
+  pairwise angles between the normals, in the clique's vertex order; psorr.hypotheses.corners matches
+  them, all models' at once, and poses them by the normals and the planes' common point;
+- a plane and an adjacent cylinder, matched and posed here: the feature is the cylinder's radius and
+  the angle between the plane's normal and the axis; the pose aligns the normal, the axis and the axis
+  line, and takes the position along the axis from where the axis meets the plane, or, for an axis
+  along the plane, from the cylinders' box centres.
 """
 
 from __future__ import annotations
 
-import itertools
 from dataclasses import dataclass
 from enum import StrEnum
 
 import numpy as np
 
-from psorr.geometry.rotations import kabsch_rotation
 from psorr.types import Primitive, PrimitiveKind, PrimitiveShapeGraph
 
 _MIN_SPAN = 0.3  # |det| of three unit normals: under it, two of the planes are nearly parallel
@@ -77,37 +75,16 @@ def graph_cliques(graph: PrimitiveShapeGraph) -> list[Clique]:
     return out
 
 
-def correspondences(scene: Clique, model: Clique, angle_tol: float, radius_tol: float) -> list[tuple[int, ...]]:
-    """The orders of ``model``'s vertices that match ``scene``'s vertices one to one within the
-    tolerances (degrees; a relative radius tolerance), each as the model vertices in scene order."""
-    if scene.kind is not model.kind:
-        return []
-    if scene.kind is CliqueKind.PLANE_CYLINDER:
-        radius_ok = abs(scene.feature[0] - model.feature[0]) <= radius_tol * model.feature[0]
-        return [model.vertices] if radius_ok and abs(scene.feature[1] - model.feature[1]) <= angle_tol else []
-    out = []
-    for order in itertools.permutations(range(3)):
-        f = model.feature
-        # Pairwise angles of the model vertices taken in this order: (o0-o1, o1-o2, o0-o2).
-        pair = {(0, 1): f[0], (1, 2): f[1], (0, 2): f[2]}
-        permuted = [pair[tuple(sorted((order[x], order[y])))] for x, y in ((0, 1), (1, 2), (0, 2))]
-        if np.all(np.abs(np.array(permuted) - scene.feature) <= angle_tol):
-            out.append(tuple(model.vertices[k] for k in order))
-    return out
+def cylinder_match(scene: Clique, model: Clique, angle_tol: float, radius_tol: float) -> bool:
+    """Do two plane-and-cylinder cliques match: the radii within ``radius_tol`` of the model's, the
+    normal-to-axis angles within ``angle_tol`` degrees?"""
+    radius_ok = abs(scene.feature[0] - model.feature[0]) <= radius_tol * model.feature[0]
+    return bool(radius_ok and abs(scene.feature[1] - model.feature[1]) <= angle_tol)
 
 
-def _planes_point(planes: list[Primitive]) -> np.ndarray:
-    """The point (3,) the three planes share."""
-    normals = np.array([p.normal for p in planes])
-    return np.linalg.solve(normals, -np.array([p.offset for p in planes]))
-
-
-def clique_poses(kind: CliqueKind, scene: list[Primitive], model: list[Primitive]) -> list[np.ndarray]:
-    """Poses (4, 4) T_cloud_model that carry the ``model`` primitives onto the ``scene`` ones (in
-    correspondence order): one for three planes, two (the axis either way) for a plane and a cylinder."""
-    if kind is CliqueKind.PLANES:
-        R = kabsch_rotation(np.array([p.normal for p in model]), np.array([p.normal for p in scene]))
-        return [_pose(R, _planes_point(scene) - R @ _planes_point(model))]
+def cylinder_poses(scene: list[Primitive], model: list[Primitive]) -> list[np.ndarray]:
+    """The two poses (4, 4) T_cloud_model (the axis either way) that carry the model's plane and cylinder
+    (in that order) onto the scene's."""
     (plane_s, cyl_s), (plane_m, cyl_m) = scene, model
     poses = []
     for sign in (1.0, -1.0):

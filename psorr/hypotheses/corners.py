@@ -9,6 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
+from psorr.geometry.rotations import kabsch_rotations
 from psorr.hypotheses.cliques import Clique, CliqueKind
 
 # (o0-o1, o1-o2, o0-o2) of a vertex order o, as indices into a clique's feature (0-1, 1-2, 0-2).
@@ -78,11 +79,7 @@ class CornerIndex:
             return empty
         scene_normals, scene_points = _corner_arrays(prims, scene_rows)
         model_normals = self.normals[m]
-        U, _, Vt = np.linalg.svd(np.einsum("kij,kil->kjl", model_normals, scene_normals[q]))
-        d = np.sign(np.linalg.det(np.einsum("kji,klj->kil", Vt, U)))
-        D = np.repeat(np.eye(3)[None], len(q), axis=0)
-        D[:, 2, 2] = d
-        R = np.einsum("kji,kjl,kml->kim", Vt, D, U)
+        R = kabsch_rotations(model_normals, scene_normals[q])
         turned = np.einsum("kij,klj->kli", R, model_normals)
         fits = (np.einsum("kli,kli->kl", turned, scene_normals[q]) >= np.cos(np.radians(angle_tolerance))).all(axis=1)
         q, m, R = q[fits], m[fits], R[fits]

@@ -19,7 +19,7 @@ import numpy as np
 
 from psorr.checks import params as check
 from psorr.hypotheses.candidates import CandidateSet
-from psorr.hypotheses.cliques import Clique, CliqueKind, clique_poses, correspondences, graph_cliques
+from psorr.hypotheses.cliques import Clique, CliqueKind, cylinder_match, cylinder_poses, graph_cliques
 from psorr.hypotheses.corners import CornerIndex
 from psorr.hypotheses.pairs import PairParams
 from psorr.hypotheses.pose_clusters import share_out
@@ -114,21 +114,22 @@ class PsgMatcher:
         for scene in (c for c in scene_cliques if c.kind is CliqueKind.PLANE_CYLINDER):
             for index, cliques in enumerate(self.model_cliques):
                 for model in cliques:
-                    for order in correspondences(scene, model, self.params.angle_tolerance, RADIUS_TOLERANCE):
-                        for T in self._poses(scene, order, prims, index):
+                    if model.kind is CliqueKind.PLANE_CYLINDER and cylinder_match(
+                            scene, model, self.params.angle_tolerance, RADIUS_TOLERANCE):
+                        for T in self._poses(scene, model, prims, index):
                             poses.append(T)
                             models.append(index)
-                            nodes.append(tuple((s, index, m) for s, m in zip(scene.vertices, order)))
+                            nodes.append(tuple((s, index, m) for s, m in zip(scene.vertices, model.vertices)))
         return _Hypotheses(np.array(poses).reshape(-1, 4, 4), np.array(models, dtype=np.int64), nodes)
 
-    def _poses(self, scene: Clique, order, prims, index: int) -> list[np.ndarray]:
-        """The clique's poses whose turned model normals (and axis) land within the tolerance of the
-        scene's: a mirrored vertex order fits no rotation."""
-        model_prims = [self.models[index].graph.primitives[k] for k in order]
+    def _poses(self, scene: Clique, model: Clique, prims, index: int) -> list[np.ndarray]:
+        """The plane-and-cylinder clique's poses whose turned model normal and axis land within the
+        tolerance of the scene's."""
+        model_prims = [self.models[index].graph.primitives[k] for k in model.vertices]
         scene_prims = [prims[k] for k in scene.vertices]
         cos_tol = np.cos(np.radians(self.params.angle_tolerance))
         out = []
-        for T in clique_poses(scene.kind, scene_prims, model_prims):
+        for T in cylinder_poses(scene_prims, model_prims):
             turned = [T[:3, :3] @ _direction(p) for p in model_prims]
             if all(abs(t @ _direction(s)) >= cos_tol for t, s in zip(turned, scene_prims)):
                 out.append(T)

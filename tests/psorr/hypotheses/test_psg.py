@@ -5,7 +5,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from psorr.hypotheses.cliques import CliqueKind, clique_poses, correspondences, graph_cliques
+from psorr.hypotheses.cliques import CliqueKind, cylinder_match, cylinder_poses, graph_cliques
+from psorr.hypotheses.corners import CornerIndex
 from psorr.recognize import Recognizer
 from psorr.synthetic.catalog import load_catalog, symmetric_add
 from psorr.synthetic.workpiece_scenes import workpiece_scene
@@ -66,13 +67,21 @@ def test_clique_features_are_invariant_to_rigid_motion(library, part):
         T = _random_motion(np.random.default_rng(seed))
         moved = graph_cliques(_moved(graph, T))
         assert [c.vertices for c in moved] == [c.vertices for c in cliques]
+        corners = CornerIndex([library.model(part)], [cliques])
         for a, b in zip(cliques, moved):
             assert np.allclose(a.feature, b.feature, atol=1e-6)
             # and the match gives a pose that carries the clique's primitives onto the moved ones
-            assert a.vertices in correspondences(b, a, 1e-3, 1e-6)
             model = [graph.primitives[k] for k in a.vertices]
             scene = [_moved(graph, T).primitives[k] for k in b.vertices]
-            assert any(_carries(P, model, scene) for P in clique_poses(a.kind, scene, model))
+            if a.kind is CliqueKind.PLANE_CYLINDER:
+                assert cylinder_match(b, a, 1e-3, 1e-6)
+                poses = cylinder_poses(scene, model)
+            else:
+                found = corners.match([b], _moved(graph, T).primitives, 1e-3)
+                same_order = (found.model_vertices == np.array(a.vertices)).all(axis=1)
+                assert same_order.any()
+                poses = list(found.poses[same_order])
+            assert any(_carries(P, model, scene) for P in poses)
 
 
 def test_method_psg_finds_a_single_chassis(library):
@@ -90,8 +99,6 @@ def test_method_psg_finds_a_single_chassis(library):
 
 
 def test_the_corner_index_finds_the_motion_of_a_moved_model(library):
-    from psorr.hypotheses.corners import CornerIndex
-
     models = list(library.models)
     index = CornerIndex(models, [graph_cliques(m.graph) for m in models])
     chassis = [m.name for m in models].index("chassis")
