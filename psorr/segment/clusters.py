@@ -33,12 +33,16 @@ def absorb_small(clusters: np.ndarray, edge_i: np.ndarray, edge_j: np.ndarray, n
         pairs = pairs[order]
         first = np.r_[True, pairs[1:, 0] != pairs[:-1, 0]]
         target[pairs[first, 0]] = pairs[first, 1]
-    merged = target[clusters]
-    kept = np.unique(merged[merged >= 0])
-    by_size = kept[np.argsort(-np.bincount(merged[merged >= 0])[kept], kind="stable")]
-    renumber = np.full(len(sizes), -1, dtype=np.int64)
-    renumber[by_size] = np.arange(len(by_size))
-    return np.where(merged >= 0, renumber[np.maximum(merged, 0)], -1)
+    return by_size(target[clusters])
+
+
+def by_size(clusters: np.ndarray) -> np.ndarray:
+    """Cluster ids (N,) (-1: none) renumbered 0..K-1, largest first (ties in id order)."""
+    kept = np.unique(clusters[clusters >= 0])
+    order = kept[np.argsort(-np.bincount(clusters[clusters >= 0])[kept], kind="stable")]
+    renumber = np.full(int(clusters.max(initial=-1)) + 1, -1, dtype=np.int64)
+    renumber[order] = np.arange(len(order))
+    return np.where(clusters >= 0, renumber[np.maximum(clusters, 0)], -1)
 
 
 def merge_unless_distinct(clusters: np.ndarray, colours: np.ndarray, edge_i: np.ndarray, edge_j: np.ndarray,
@@ -59,9 +63,4 @@ def merge_unless_distinct(clusters: np.ndarray, colours: np.ndarray, edge_i: np.
     a, b = a[touching], b[touching]
     distinct = even[a] & even[b] & (np.linalg.norm(means[a] - means[b], axis=1) >= distance)
     joined = conditional_clusters(n, a, b, ~distinct)
-    merged = np.where(valid, joined[np.maximum(clusters, 0)], -1)
-    kept = np.unique(merged[merged >= 0])
-    order = kept[np.argsort(-np.bincount(merged[merged >= 0])[kept], kind="stable")]
-    renumber = np.full(int(merged.max()) + 1, -1, dtype=np.int64)
-    renumber[order] = np.arange(len(order))
-    return np.where(merged >= 0, renumber[np.maximum(merged, 0)], -1)
+    return by_size(np.where(valid, joined[np.maximum(clusters, 0)], -1))
