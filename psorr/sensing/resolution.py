@@ -31,8 +31,9 @@ class ThinnedCloud:
         cloud: the thinned cloud, organised as the depth image of a pinhole camera of the given focal
             length at the origin (NaN where no point fell); the input itself when not thinned.
         kept: (M,) indices of the input rows it holds, in its row order (all rows when not thinned).
-        points_per_cell: the input's finite points per occupied direction cell (1.0 for a cloud at the
-            sensor's sampling; thinned when at least FINER_BY).
+        points_per_cell: the input's finite points per occupied pixel, as counted (thinned when at least
+            FINER_BY); 1.0 when not counted: an organised cloud whose own grid is too coarse to thin is
+            judged by the grid alone, and a cloud with no point in front of the sensor.
     """
 
     cloud: PointCloud
