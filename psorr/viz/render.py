@@ -172,7 +172,7 @@ def save_segmentation_png(path, cloud: PointCloud, labels: np.ndarray, segments,
     own = np.array([plt.get_cmap("tab20")(k % 20)[:3] for k in range(len(segments))]).reshape(-1, 3)
     image, px = painted(cloud, labels, own)
     h, w = image.shape[:2]
-    panels = [image] if cloud.colors is None else [_true_colours(cloud, px, w, h), image]
+    panels = [image] if cloud.colors is None else [_true_colours(cloud), image]
     fig, axes = plt.subplots(1, len(panels), figsize=(len(panels) * w / 80, h / 80 + 0.6), dpi=80, squeeze=False)
     for ax, panel in zip(axes[0], panels):
         ax.imshow(panel, interpolation="nearest")
@@ -190,11 +190,7 @@ def save_segmentation_png(path, cloud: PointCloud, labels: np.ndarray, segments,
     return path
 
 
-def _true_colours(cloud: PointCloud, px: np.ndarray, width: int, height: int) -> np.ndarray:
-    """The cloud drawn in its own colours at its points' pixels px (N, 2)."""
-    image = np.ones((height, width, 3))
-    valid = np.flatnonzero(cloud.valid_mask & np.isfinite(cloud.colors).all(axis=1))
-    cols = np.clip(px[valid, 0].round().astype(int), 0, width - 1)
-    rows = np.clip(px[valid, 1].round().astype(int), 0, height - 1)
-    image[rows, cols] = cloud.colors[valid]
-    return image
+def _true_colours(cloud: PointCloud) -> np.ndarray:
+    """The cloud drawn in its own colours, laid out as painted() lays it out: each point its own label."""
+    coloured = np.isfinite(cloud.colors).all(axis=1)
+    return painted(cloud, np.where(coloured, np.arange(len(cloud)), -1), np.nan_to_num(cloud.colors))[0]
