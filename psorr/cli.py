@@ -50,8 +50,9 @@ def _log(message: str) -> None:
     print(message, file=sys.stderr, flush=True)
 
 
-def _decompose(args) -> int:
-    from psorr.decomposition import DecomposeParams, decompose
+def _labelling_input(args):
+    """The cloud of a command that labels every point (decompose, segment): its --out and --png checked
+    first, then the cloud read and checked for metres in the sensor frame."""
     from psorr.io.clouds import read_cloud
 
     check_output(args.out, "--out", ".npy")
@@ -59,6 +60,20 @@ def _decompose(args) -> int:
     cloud = read_cloud(args.cloud)
     require_sensor_metres(cloud, str(args.cloud))
     _log(f"read {args.cloud}: {len(cloud)} points, {int(cloud.valid_mask.sum())} finite")
+    return cloud
+
+
+def _write_labels(path: str | None, labels: np.ndarray) -> None:
+    if path:
+        Path(path).parent.mkdir(parents=True, exist_ok=True)
+        np.save(path, labels.astype(np.int64))
+        _log(f"wrote {len(labels)} labels to {path}")
+
+
+def _decompose(args) -> int:
+    from psorr.decomposition import DecomposeParams, decompose
+
+    cloud = _labelling_input(args)
     params = DecomposeParams() if args.voxel_size is None else DecomposeParams(voxel_size=args.voxel_size)
     try:
         result = decompose(cloud, params, np.random.default_rng(args.seed))
@@ -66,11 +81,7 @@ def _decompose(args) -> int:
         # Too few points, or too few voxels at this size: a problem of this file, so it is named.
         raise CloudFileError(args.cloud, str(exc).replace("voxel_size", "--voxel-size")) from None
     graph = result.graph
-    if args.out:
-        out = Path(args.out)
-        out.parent.mkdir(parents=True, exist_ok=True)
-        np.save(out, result.labels.astype(np.int64))
-        _log(f"wrote {len(result.labels)} labels to {out}")
+    _write_labels(args.out, result.labels)
     if args.png:
         from psorr.viz.render import save_decomposition_png
 
@@ -104,20 +115,13 @@ def _decompose(args) -> int:
 
 
 def _segment(args) -> int:
-    from psorr.io.clouds import read_cloud
     from psorr.segment import segment
 
-    check_output(args.out, "--out", ".npy")
-    check_output(args.png, "--png", ".png")
-    cloud = read_cloud(args.cloud)
-    require_sensor_metres(cloud, str(args.cloud))
-    _log(f"read {args.cloud}: {len(cloud)} points, {int(cloud.valid_mask.sum())} finite"
-         + ("" if cloud.colors is not None else "; no colours, so segmented by distance alone"))
+    cloud = _labelling_input(args)
+    if cloud.colors is None:
+        _log(f"{args.cloud} has no colours: segmented by distance alone")
     result = segment(cloud, rng=np.random.default_rng(args.seed))
-    if args.out:
-        Path(args.out).parent.mkdir(parents=True, exist_ok=True)
-        np.save(args.out, result.labels)
-        _log(f"wrote {len(result.labels)} labels to {args.out}")
+    _write_labels(args.out, result.labels)
     if args.png:
         from psorr.viz.render import save_segmentation_png
 
@@ -174,8 +178,7 @@ def _recognize(args) -> int:
                          if stats.method == "psg" else {})},
         }))
     else:
-        header = f"{'model':<16} {'score':>6} {'seen':>5}  position (m)"
-        print(header + "               colour" if args.colour else header)
+        print(f"{'model':<16} {'score':>6} {'seen':>5}  position (m)" + (" " * 15 + "colour" if args.colour else ""))
         for d in result.detections:
             where = " ".join(f"{v:+.3f}" for v in d.T_cloud_model[:3, 3])
             colour = f"  {d.colour.name}" if d.colour else ""
