@@ -70,7 +70,7 @@ class Recognizer:
         self.library, self.method, self.params = library, Method(method), params or RecognizeParams()
         self.use_colour = use_colour
         # recognize() thins a finer cloud once, on entry; the decompositions of what it thinned need not look again.
-        self.scene_decompose = replace(self.params.decompose, sensor_focal=None)
+        self.scene_decompose = replace(self.params.decompose, thin_finer=False)
         self.max_diameter = max(m.diameter for m in library.models)
         p = self.params
         # Candidates of random point pairs start rougher than those of primitive pairs: PSORR's that end up
@@ -142,10 +142,10 @@ class Recognizer:
     def _at_sensor_sampling(self, cloud: PointCloud) -> PointCloud:
         """The cloud thinned to the sampling the thresholds suit, when it is finer (a 3M-point
         structured-light frame); a Kinect-v1-like cloud as it is (docs/decisions/0050)."""
-        focal = self.params.decompose.sensor_focal
-        if not self.params.decompose.sensor_noise or focal is None:
+        p = self.params.decompose
+        if not (p.sensor_noise and p.thin_finer):
             return cloud
-        return thin_to_focal(cloud, focal).cloud
+        return thin_to_focal(cloud, p.sensor_focal).cloud
 
     def _stats(self, found: SearchResult, start: float) -> RecognitionStats:
         # No hypothesis, no verification to report: the cost of screening none is no cost per hypothesis.

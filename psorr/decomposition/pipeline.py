@@ -36,7 +36,8 @@ class DecomposeParams:
     voxel_size: float = 0.012
     k_neighbours: int = 8
     sensor_noise: bool = True          # False: one threshold for all depths (CAD samples), and no thinning
-    sensor_focal: float | None = 525.0  # px: a sensor cloud sampled finer is thinned to this (Kinect v1) sampling
+    sensor_focal: float = 525.0        # px: a sensor cloud sampled finer is thinned to this (Kinect v1) sampling
+    thin_finer: bool = True            # False: never thinned (a cloud thinned already)
     inlier_sigmas: float = 2.5         # inlier distance = max(min_inlier_distance, this x sigma(z))
     min_inlier_distance: float = 0.003
     max_normal_angle_deg: float = 25.0
@@ -57,12 +58,11 @@ class DecomposeParams:
     point_check: float = 2.0           # final per-point distance test, in inlier distances
 
     def __post_init__(self):
-        check.positive(self, "voxel_size", "inlier_sigmas", "min_inlier_distance", "null_cost", "max_distance_ratio",
-                       "adjacency_gap", "point_check")
-        check.positive(self, "sensor_focal", optional=True)  # None: never thinned (a cloud thinned already)
+        check.positive(self, "voxel_size", "sensor_focal", "inlier_sigmas", "min_inlier_distance", "null_cost",
+                       "max_distance_ratio", "adjacency_gap", "point_check")
         check.whole(self, "k_neighbours", "min_points", "ransac_candidates", "ransac_sample",
                     "ransac_accept_per_round", "ransac_patience", "max_primitives", "max_passes")
-        check.flag(self, "sensor_noise", "cylinders")
+        check.flag(self, "sensor_noise", "thin_finer", "cylinders")
         check.within(self, "max_normal_angle_deg", low=0, high=90, closed=False)
         lo, hi = check.real_pair(self, "cylinder_radius_range", " with 0 < min < max")
         if not 0 < lo < hi:
@@ -134,7 +134,7 @@ def decompose(cloud: PointCloud, params: DecomposeParams | None = None,
         clock.append(time.perf_counter())
         return (clock[-1] - clock[-2]) * 1e3
 
-    focal = params.sensor_focal if params.sensor_noise else None  # CAD samples are never thinned
+    focal = params.sensor_focal if params.sensor_noise and params.thin_finer else None  # nor are CAD samples
     vox = preprocess(cloud, params.voxel_size, params.k_neighbours, focal)
     threshold = inlier_threshold(vox.points, params)
     edge_i, edge_j, edge_len = undirected_edges(vox)
@@ -265,8 +265,7 @@ def _finalise(cloud, vox, pieces, labels, edges, params):
     point_labels = np.full(len(cloud), -1, dtype=np.int64)
     point_labels[valid] = labels[vox.voxel_of[valid]]
     # Group point indices by label with one sort rather than a scan per primitive.
-    # Few labels: a stable sort of 16-bit keys is a radix sort, several times faster on millions of points.
-    small = max(pieces, default=-1) < np.iinfo(np.int16).max
+    small = max(pieces, default=-1) < np.iinfo(np.int16).max  # 16-bit keys: a radix sort, several times faster
     order = np.argsort(point_labels.astype(np.int16) if small else point_labels, kind="stable")
     bounds = np.searchsorted(point_labels[order], np.arange(max(pieces, default=-1) + 2))
     primitives, remap = [], {}
