@@ -29,12 +29,12 @@ def _tolerance(z, sigmas, min_tolerance):
 
 
 @njit(cache=True)
-def check_poses(depth, nearby, width, height, focal, cx, cy, plane, has_plane, points, normals, offsets,
+def check_poses(depth, nearby, neighbour, width, height, focal, cx, cy, plane, has_plane, points, normals, offsets,
                 owners, poses, max_points, sigmas, min_tolerance):
     """(P, 5) int64 counts (visible, support, violation, occluded, support above the table) of P poses
     (P, 4, 4), pose k of the model whose samples are rows offsets[m]:offsets[m + 1] of points, normals
-    (N, 3), m = owners[k]; depth and nearby (width x height,) are the view's buffers
-    (psorr.verification.scene_view.SceneView.depth and .nearby_depth)."""
+    (N, 3), m = owners[k]; depth, nearby and neighbour (width x height,) are the view's buffers
+    (psorr.verification.scene_view.SceneView.depth, .nearby_depth and .neighbour_depth)."""
     P = len(poses)
     out = np.zeros((P, 5), dtype=np.int64)
     bw = width // _SELF_BLOCK + 1
@@ -87,7 +87,7 @@ def check_poses(depth, nearby, width, height, focal, cx, cy, plane, has_plane, p
                 if not has_plane or (plane[0] * px[j] + plane[1] * py[j] + plane[2] * z + plane[3]) > tol:
                     n_above += 1
             elif np.isfinite(observed):
-                if z < observed - tol:
+                if z < neighbour[pix[j]] - tol:  # seen through at the pixel and every neighbour
                     n_violation += 1
                 elif z > observed + tol:
                     n_occluded += 1

@@ -110,9 +110,9 @@ class Compiled:
         plane = view.support_plane
         has_plane = plane is not None
         plane = np.asarray(plane if has_plane else np.zeros(4), float)
-        depth, nearby = view.depth, view.nearby_depth
+        depth, nearby, neighbour = view.depth, view.nearby_depth, view.neighbour_depth
         return lambda: compiled_points.check_poses(
-            depth, nearby, view.width, view.height, view.focal, view.cx, view.cy, plane, has_plane,
+            depth, nearby, neighbour, view.width, view.height, view.focal, view.cx, view.cy, plane, has_plane,
             self.points, self.normals, self.point_offsets, owners, np.ascontiguousarray(poses, float),
             params.max_points, params.sigmas, params.min_tolerance)
 

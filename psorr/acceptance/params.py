@@ -29,7 +29,7 @@ class AcceptParams:
     check: CheckParams = field(default_factory=CheckParams)
     min_visible_fraction: float = 0.35
     min_unblocked_fraction: float = 0.6
-    max_violation_ratio: float = 0.15
+    max_violation_ratio: float = 0.05
     min_support: int = 60
     # The table explains the rest as well: a circuit board lying flat is supported by the table wherever
     # it is posed on it. 0 turns this off, for a part so thin (a bare plate) that nothing of it stands

@@ -86,7 +86,7 @@ def test_point_counts_equal_the_librarys(scene, library, poses):
     expected = check_poses(view, [models[m].points for m in owners], [models[m].normals for m in owners], T, params)
     offsets = np.r_[0, np.cumsum([len(m.points) for m in models])]
     got = compiled_points.check_poses(
-        view.depth, view.nearby_depth, view.width, view.height, view.focal, view.cx, view.cy,
+        view.depth, view.nearby_depth, view.neighbour_depth, view.width, view.height, view.focal, view.cx, view.cy,
         np.asarray(view.support_plane, float), True, np.concatenate([m.points for m in models]),
         np.concatenate([m.normals for m in models]), offsets, owners, T, params.max_points, params.sigmas,
         params.min_tolerance)

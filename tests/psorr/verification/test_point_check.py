@@ -111,3 +111,18 @@ def test_support_the_table_explains_as_well_is_not_counted_above_it():
             T_slid = np.linalg.inv(scene.T_world_camera) @ T_world_shift @ scene.T_world_camera @ T_true
             slid = check_pose(view, board.points, board.normals, T_slid)
             assert slid.n_support > 400 and slid.n_support_above_table < needed / 2, (seed, dx, slid)
+
+
+def test_the_rim_of_a_true_pose_is_not_seen_through_but_a_pose_over_the_table_is(scene_and_models):
+    # A point on a part's rim falls on the pixel beside it as often as on its own, where the sensor sees
+    # the table behind: seen through counts only where no neighbouring pixel measured the part either.
+    scene, library = scene_and_models
+    view = SceneView(scene.cloud)
+    for instance in scene.instances:
+        model = library.model(instance.name)
+        truth = check_pose(view, model.points, model.normals, instance.T_camera_model)
+        assert truth.violation_ratio <= 0.05, instance.name
+    model = library.model("bushing")
+    lifted = scene.instances[[i.name for i in scene.instances].index("bushing")].T_camera_model.copy()
+    lifted[:3, 3] -= 0.05 * lifted[:3, 3] / np.linalg.norm(lifted[:3, 3])  # 5 cm nearer the sensor: in free space
+    assert check_pose(view, model.points, model.normals, lifted).violation_ratio > 0.5
