@@ -9,8 +9,7 @@ from the table, tilted 0-45 degrees.
 
 A detection finds an instance within a symmetry-aware ADD of 0.1 x the model's diameter, the
 symmetries found from the mesh (psorr.synthetic.mesh_symmetry); any other detection is false. Methods:
-psorr and orr (psorr.Recognizer), psorr_outline (PSORR with its outline hypotheses on), o3d_global
-(Open3D's global registration tutorial per model,
+psorr and orr (psorr.Recognizer), o3d_global (Open3D's global registration tutorial per model,
 peer_o3d_global.py), fpfh (cluster-wise FPFH, peer_fpfh.py) and opencv_ppf (peer_opencv.py; skipped
 without OpenCV's contrib modules). Every method runs on one core, on a scene before the next scene.
 
@@ -42,7 +41,7 @@ from psorr.synthetic.mesh_scenes import SceneKind, load_meshes, mesh_scene, simp
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_CAD = ROOT.parent / "shared" / "cad" / "prusa_i3"
-METHODS = ("psorr", "psorr_outline", "orr", "o3d_global", "fpfh", "opencv_ppf")
+METHODS = ("psorr", "orr", "o3d_global", "fpfh", "opencv_ppf")
 SPLIT_SEED = {"dev": 1, "test": 2}
 KIND_SEED = {SceneKind.SINGLE: 0, SceneKind.CLUTTER: 1, SceneKind.OCCLUDED: 2}
 
@@ -77,7 +76,6 @@ def _methods(chosen: list[str], library, meshes: dict) -> dict:
     from peer_o3d_global import recognize_o3d_global
     from peer_opencv import _cv2, recognize_ppf_opencv
 
-    from psorr.hypotheses.outline import OutlineParams
     from psorr.recognize import Recognizer
     from psorr.recognize_params import RecognizeParams
 
@@ -87,7 +85,6 @@ def _methods(chosen: list[str], library, meshes: dict) -> dict:
 
     makers = {
         "psorr": lambda: ours("psorr"), "orr": lambda: ours("orr"),
-        "psorr_outline": lambda: ours("psorr", RecognizeParams(outline=OutlineParams(enabled=True))),
         "o3d_global": lambda: lambda cloud, rng: recognize_o3d_global(meshes, cloud, rng),
         "fpfh": lambda: lambda cloud, rng: recognize_fpfh(meshes, cloud, rng),
         "opencv_ppf": lambda: (_cv2(), lambda cloud, rng: recognize_ppf_opencv(meshes, cloud, rng))[1],

@@ -39,9 +39,5 @@ def headline_row(base: str = "") -> list[str]:
         fewer &= all(n < found["psorr"] for m, n in found.items() if not m.startswith("psorr"))
     text = "; ".join(line(n, s, "psorr") for n, s in data["splits"].items())
     text += " (targets 0.95, 0.85 and 0.2: **missed**" + ("; each peer finds fewer" if fewer else "") + ")"
-    outlined = {n: s for n, s in data["splits"].items() if "psorr_outline" in s["methods"]}
-    if outlined:
-        text += "; with outline hypotheses on (off by default): " + "; ".join(
-            line(n, s, "psorr_outline") for n, s in outlined.items())
     parts = sum(len(split["parts"]) for split in data["splits"].values())
     return [f"[Parts we have never seen, {parts} real CAD parts]({base}generalization.md)", text]

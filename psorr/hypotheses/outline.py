@@ -1,12 +1,14 @@
-"""Pose hypotheses from a part's outline on the table, for parts that show too few primitives to pair.
+"""Pose hypotheses for parts resting on the table, from the patch of points they raise above it.
 
 A clip, a hinge or a plate lying on the table shows one face or none that the decomposition can
-find, and no pair. What it does show is an outline: the pixels standing higher above the supporting
-plane than the sensor's noise. Each connected patch of them is matched to the silhouettes of every
-model in its most probable stable resting poses (:func:`psorr.synthetic.resting.stable_rests`) seen
-from above: a silhouette of about the patch's area, from a rest about as high as the patch, is
-turned about the plane's normal to the angles where it overlaps the patch best, and each gives a
-pose. The best of them go through the same ICP and acceptance as every other hypothesis.
+find, and no pair. But a part on a table rests in one of a few stable poses, which leaves three
+unknowns: where it lies, and how it is turned about the table's normal. Each connected patch of
+points standing above the supporting plane is searched over those three, for every model in each of
+its most probable resting poses (:func:`psorr.synthetic.resting.stable_rests`): the cost of a pose is
+how far the patch's points lie from the model's surface (the model's distance field) plus how far the
+model's silhouette reaches past the patch (the patch's distance field), each truncated at the point
+check's depth tolerance. A coarse grid of turns and shifts is refined around its best distinct turns,
+and the best poses of each patch go through the same ICP and acceptance as every other hypothesis.
 """
 
 from __future__ import annotations
@@ -20,77 +22,77 @@ from scipy import ndimage
 
 from psorr.checks import params as check
 from psorr.geometry.boxes import orthonormal_frame
+from psorr.geometry.distance_field import DistanceField
 from psorr.hypotheses.candidates import Candidate, CandidateSet
 from psorr.sensing.kinect_noise import KINECT_V1
 from psorr.types import PointCloud
+from psorr.verification.point_check import CheckParams, depth_tolerance
 
 
 @dataclass(frozen=True)
 class OutlineParams:
-    """Outline hypotheses; distances in metres, areas in m^2.
+    """Resting-pose hypotheses; distances in metres, areas in m^2, angles in degrees.
 
     A point stands on the table when it is higher than ``sigmas`` x the sensor's depth sigma at its
-    depth, and at least ``min_height``. Patches are drawn on a grid of ``cell``; those of at least
-    ``min_area`` are matched to each model's ``rests`` most probable resting poses no higher than
-    ``max_rest_height``, whose silhouette area is within ``area_ratio`` of the patch's and whose
-    height is within ``height_slack`` of the patch's (its 95th percentile). Silhouettes are turned in
-    steps of ``angle_step_deg``; the ``angles`` best-overlapping turns give poses, and the
-    ``max_candidates`` best of a scene, by overlap, go on to acceptance. Off by default.
+    depth, and at least ``min_height``. Patches are drawn on a grid of ``cell`` (also the distance
+    fields' cell); a patch of at least ``min_area`` counts when at least ``min_standing_share`` of the
+    points in its cells stand (noise lifts scattered table points, an object all of them). Each
+    model's ``rests`` most probable resting poses whose height is within ``height_slack`` of the
+    patch's top are searched: turns in steps of ``angle_step_deg`` and shifts of the centre within
+    ``shift`` in steps of twice the cell, then the ``angles`` best turns at least four steps apart are
+    refined in steps of ``fine_angle_step_deg`` and half a cell. A pose's cost is the mean square of
+    the distances (truncated at the point check's tolerance, over its square) of the patch's points to
+    the model and of the silhouette to the patch, summed; poses costing more than ``max_cost`` are
+    dropped (at 0.5, the points lie half a tolerance off on average both ways). The ``max_candidates``
+    best poses of a scene, taken from its patches in turn, go on to acceptance.
     """
 
-    enabled: bool = False
+    enabled: bool = True
     cell: float = 0.002
     sigmas: float = 2.0
     min_height: float = 0.0027
     min_area: float = 2e-4
-    rests: int = 3
-    max_rest_height: float = 0.03
-    area_ratio: tuple[float, float] = (0.6, 1.4)
+    min_standing_share: float = 0.5
+    rests: int = 4
     height_slack: float = 0.006
-    angle_step_deg: float = 6.0
+    angle_step_deg: float = 8.0
+    fine_angle_step_deg: float = 2.0
+    shift: float = 0.004
     angles: int = 2
+    max_cost: float = 0.5
     max_candidates: int = 24
 
     def __post_init__(self):
         check.flag(self, "enabled")
-        check.positive(self, "cell", "min_height", "min_area", "max_rest_height", "height_slack", unit=" metres")
-        check.positive(self, "sigmas", "angle_step_deg")
+        check.positive(self, "cell", "min_height", "min_area", "height_slack", "shift", unit=" metres")
+        check.positive(self, "sigmas", "angle_step_deg", "fine_angle_step_deg", "max_cost")
+        check.within(self, "min_standing_share")
         check.whole(self, "rests", "angles", "max_candidates")
 
 
 @dataclass(frozen=True, eq=False)
-class Silhouette:
-    """A model resting one way, seen from above: its surface samples (N, 2) in the table plane, centred,
-    the area they cover, the rest's height, and T_table_model (4, 4) with the samples' centroid at x = y = 0."""
+class RestingShape:
+    """A model resting one way. T_table_model (4, 4) puts the model's silhouette centroid at x = y = 0
+    on the table (z = 0); ``silhouette`` (M, 2) are surface samples seen from above, in that frame;
+    ``T_model_table`` is its inverse; ``height`` the rest's height, ``reach`` the silhouette's farthest
+    sample from its centroid."""
 
     model: int
-    xy: np.ndarray
-    area: float
-    height: float
     T_table_model: np.ndarray
+    T_model_table: np.ndarray
+    silhouette: np.ndarray
+    height: float
+    reach: float
 
 
-def _masks(xy: np.ndarray, low: np.ndarray, shape: tuple[int, int], cell: float) -> np.ndarray:
-    """(A, *shape) bool images from corner ``low``: the grid cells that each of A point sets (A, N, 2) falls
-    in, each closed on its own."""
-    index = np.floor((xy - low) / cell).astype(np.int64)
-    inside = (index >= 0).all(axis=2) & (index[..., 0] < shape[0]) & (index[..., 1] < shape[1])
-    masks = np.zeros((len(xy),) + tuple(shape), dtype=bool)
-    which = np.broadcast_to(np.arange(len(xy))[:, None], inside.shape)
-    masks[which[inside], index[..., 0][inside], index[..., 1][inside]] = True
-    flat = np.zeros((3, 3, 3), dtype=bool)  # the 2-D closing's cross, spanning no two images
-    flat[1] = ndimage.generate_binary_structure(2, 1)
-    return ndimage.binary_closing(masks, structure=flat, iterations=2)
+@dataclass(frozen=True, eq=False)
+class Patch:
+    """Points standing on the table, connected: ``points`` (N, 3) in the table frame, ``outside`` the
+    distance field of its cells (2-D), ``tolerance`` the depth tolerance at its median depth."""
 
-
-def _mask(xy: np.ndarray, low: np.ndarray, shape: tuple[int, int], cell: float) -> np.ndarray:
-    """The grid cells (a bool image of ``shape`` from corner ``low``) that the points (N, 2) fall in, closed."""
-    return _masks(xy[None], low, shape, cell)[0]
-
-
-def _grid(xy: np.ndarray, cell: float, margin: float) -> tuple[np.ndarray, tuple[int, int]]:
-    low = xy.min(axis=0) - margin
-    return low, tuple(int(n) for n in np.ceil((xy.max(axis=0) + margin - low) / cell).astype(np.int64) + 1)
+    points: np.ndarray
+    outside: DistanceField
+    tolerance: float
 
 
 def table_frame(plane: np.ndarray) -> np.ndarray:
@@ -103,95 +105,147 @@ def table_frame(plane: np.ndarray) -> np.ndarray:
     return T
 
 
-class OutlineMatcher:
-    """The library's silhouettes in their resting poses, matched to the patches standing on a scene's table."""
+def _turns(angles: np.ndarray) -> np.ndarray:
+    """(A, 3, 3) rotations by ``angles`` (radians) about z."""
+    c, s = np.cos(angles), np.sin(angles)
+    R = np.zeros((len(angles), 3, 3))
+    R[:, 0, 0], R[:, 0, 1], R[:, 1, 0], R[:, 1, 1], R[:, 2, 2] = c, -s, s, c, 1.0
+    return R
 
-    def __init__(self, models, params: OutlineParams):
+
+def _subset(points: np.ndarray, count: int) -> np.ndarray:
+    """At most ``count`` of ``points``, evenly through them (no draw: the same patch gives the same poses)."""
+    return points[np.linspace(0, len(points) - 1, min(count, len(points))).astype(np.int64)]
+
+
+class OutlineMatcher:
+    """The library's models in their resting poses, searched over the patches standing on a scene's table."""
+
+    _SILHOUETTE_SAMPLES = 150  # of the model, seen from above: enough to tell a silhouette from another
+    _COARSE_POINTS, _FINE_POINTS = 120, 300  # of the patch
+
+    def __init__(self, models, params: OutlineParams, check: CheckParams | None = None):
         from psorr.synthetic.resting import stable_rests
 
-        self.params, self.silhouettes = params, []
-        p = params
-        self.turn_angles = np.radians(np.arange(0.0, 360.0, p.angle_step_deg))
+        self.params, self.check, self.shapes, self.fields = params, check or CheckParams(), [], []
+        self.truncation = 2 * self.check.min_tolerance  # holds the point check's tolerance out to 2 m and more
         for index, model in enumerate(models):
+            self.fields.append(DistanceField.of_points(model.points, params.cell, self.truncation))
             mesh = trimesh.Trimesh(model.vertices, model.faces, process=False)
-            for rest in stable_rests(mesh)[:p.rests]:
-                if rest.height > p.max_rest_height:
-                    continue
+            for rest in stable_rests(mesh)[:params.rests]:
                 T = rest.T_table_model.copy()
-                xy = (model.points @ T[:3, :3].T + T[:3, 3])[:, :2]
-                T[:2, 3] -= xy.mean(axis=0)
-                xy = xy - xy.mean(axis=0)
-                low, shape = _grid(xy, p.cell, 0.01)
-                area = float(_mask(xy, low, shape, p.cell).sum()) * p.cell**2
-                self.silhouettes.append(Silhouette(index, xy, area, rest.height, T))
+                seen = (model.points @ T[:3, :3].T + T[:3, 3])[:, :2]
+                T[:2, 3] -= seen.mean(axis=0)
+                seen = seen - seen.mean(axis=0)
+                self.shapes.append(RestingShape(index, T, np.linalg.inv(T), _subset(seen, self._SILHOUETTE_SAMPLES),
+                                                rest.height, float(np.linalg.norm(seen, axis=1).max())))
 
     def candidates(self, cloud: PointCloud, view) -> CandidateSet:
-        """Poses of the silhouettes over the patches standing on ``view``'s supporting plane in ``cloud``."""
+        """Poses of the resting models over the patches standing on ``view``'s supporting plane in ``cloud``."""
         start = time.perf_counter()
         plane = view.support_plane
-        if plane is None or not self.silhouettes:
+        if plane is None or not self.shapes:
             return CandidateSet()
         T_cloud_table = table_frame(plane)
-        on_table = self._standing(cloud, plane, np.linalg.inv(T_cloud_table))
-        scored = []
-        for xy, heights in self._patches(on_table):
-            scored += self._matches(xy, heights, T_cloud_table)
-        scored.sort(key=lambda s: -s[0])
-        chosen = scored[:self.params.max_candidates]
-        return CandidateSet(tuple(Candidate(m, T) for _, m, T in chosen), len(scored),
-                            (time.perf_counter() - start) * 1e3)
+        per_patch = [self._patch_poses(patch) for patch in self._patches(cloud, plane, T_cloud_table)]
+        # The patches in turn, each's best first, so that one patch's many near-fits cannot crowd out another's.
+        order = sorted(((rank, cost, model, T) for poses in per_patch for rank, (cost, model, T) in enumerate(poses)),
+                       key=lambda pose: pose[:2])
+        chosen = order[:self.params.max_candidates]
+        return CandidateSet(tuple(Candidate(m, T_cloud_table @ T) for _, _, m, T in chosen),
+                            sum(len(p) for p in per_patch), (time.perf_counter() - start) * 1e3)
 
-    def _standing(self, cloud: PointCloud, plane: np.ndarray, T_table_cloud: np.ndarray) -> np.ndarray:
-        """(K, 3) the cloud's points standing on the table, in the table frame."""
+    def _patches(self, cloud: PointCloud, plane: np.ndarray, T_cloud_table: np.ndarray):
+        """Each connected patch of points standing on the table (see OutlineParams)."""
         p = self.params
         points = cloud.points[cloud.valid_mask]
         height = points @ plane[:3] + plane[3]
-        floor = np.maximum(p.min_height, p.sigmas * KINECT_V1.depth_sigma(points[:, 2]))
-        up = points[height > floor]
-        return up @ T_table_cloud[:3, :3].T + T_table_cloud[:3, 3]
-
-    def _patches(self, on_table: np.ndarray):
-        """(points (N, 2), heights (N,)) of each connected patch of at least min_area standing on the table."""
-        p = self.params
-        if len(on_table) == 0:
+        standing = height > np.maximum(p.min_height, p.sigmas * KINECT_V1.depth_sigma(points[:, 2]))
+        if standing.sum() < 3:
             return
-        low, shape = _grid(on_table[:, :2], p.cell, 0.01)
-        labels, count = ndimage.label(ndimage.binary_opening(_mask(on_table[:, :2], low, shape, p.cell)))
-        index = np.floor((on_table[:, :2] - low) / p.cell).astype(np.int64)
-        owner = labels[index[:, 0], index[:, 1]]
+        T_table_cloud = np.linalg.inv(T_cloud_table)
+        xy = points @ T_table_cloud[:2, :3].T + T_table_cloud[:2, 3]
+        up = points[standing] @ T_table_cloud[:3, :3].T + T_table_cloud[:3, 3]
+        low = up[:, :2].min(axis=0) - p.cell
+        shape = tuple(np.floor((up[:, :2].max(axis=0) + p.cell - low) / p.cell).astype(np.int64) + 1)
+        cells = np.floor((xy - low) / p.cell).astype(np.int64)
+        inside = ((cells >= 0) & (cells < shape)).all(axis=1)
+        every = np.zeros(shape, dtype=np.int64)
+        np.add.at(every, tuple(cells[inside].T), 1)
+        raised = np.zeros(shape, dtype=np.int64)
+        np.add.at(raised, tuple(cells[standing].T), 1)
+        labels, count = ndimage.label(ndimage.binary_opening(ndimage.binary_closing(raised > 0, iterations=2)))
+        owner = labels[tuple(cells[standing].T)]
+        depth = points[standing, 2]
         for k in range(1, count + 1):
-            cells = np.argwhere(labels == k)
-            if len(cells) * p.cell**2 >= p.min_area:
-                yield cells * p.cell + low, on_table[owner == k, 2]
-
-    def _overlaps(self, xy: np.ndarray, centre: np.ndarray, target: np.ndarray, low) -> np.ndarray:
-        """(A,) intersection over union of the silhouette samples ``xy`` turned by each of the turn angles onto
-        ``centre`` with the patch's mask ``target`` (grid corner ``low``); all turns drawn and closed at once."""
-        c, n = np.cos(self.turn_angles)[:, None], np.sin(self.turn_angles)[:, None]
-        turned = np.stack([xy[:, 0] * c - xy[:, 1] * n, xy[:, 0] * n + xy[:, 1] * c], axis=-1) + centre  # (A, N, 2)
-        masks = _masks(turned, low, target.shape, self.params.cell)
-        both = (masks & target).sum(axis=(1, 2))
-        return both / np.maximum((masks | target).sum(axis=(1, 2)), 1)
-
-    def _matches(self, patch: np.ndarray, heights: np.ndarray, T_cloud_table: np.ndarray) -> list:
-        """(overlap, model, T_cloud_model) of the silhouettes turned onto one patch (its cells' corners (N, 2))."""
-        p = self.params
-        centre, area = patch.mean(axis=0), len(patch) * p.cell**2
-        top = np.percentile(heights, 95) if len(heights) else 0.0
-        low, shape = _grid(patch, p.cell, 0.03)
-        target = _mask(patch, low, shape, p.cell)
-        out = []
-        for s in self.silhouettes:
-            if not p.area_ratio[0] * s.area < area < p.area_ratio[1] * s.area or abs(top - s.height) > p.height_slack:
+            mine = labels == k
+            if mine.sum() * p.cell**2 < p.min_area or raised[mine].sum() < p.min_standing_share * every[mine].sum():
                 continue
-            overlap = self._overlaps(s.xy, centre, target, low)
-            # The best turns that are peaks of the overlap, not a peak's shoulders: a half-turned twin
-            # (a plate's hole at the other end) is a second peak.
-            peaks = np.flatnonzero((overlap >= np.roll(overlap, 1)) & (overlap >= np.roll(overlap, -1)))
-            turns = sorted(((overlap[k], self.turn_angles[k]) for k in peaks), key=lambda t: -t[0])
-            for share, angle in turns[:p.angles]:
-                Rz = np.eye(4)
-                Rz[:2, :2] = [[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]]
-                Rz[:2, 3] = centre
-                out.append((float(share), s.model, T_cloud_table @ Rz @ s.T_table_model))
+            members = owner == k
+            outside = DistanceField.of_points(np.argwhere(mine) * p.cell + low + p.cell / 2, p.cell, self.truncation)
+            yield Patch(up[members], outside, float(depth_tolerance(np.median(depth[members]), self.check)))
+
+    def _patch_poses(self, patch: Patch) -> list:
+        """(cost, model, T_table_model) of the best poses over ``patch``, cheapest first: the best distinct
+        turns of each resting shape about as high as the patch and no narrower, coarsely; the
+        ``max_candidates`` cheapest of those refined."""
+        p = self.params
+        top = np.percentile(patch.points[:, 2], 98)
+        centre = np.append(patch.points[:, :2].mean(axis=0), 0.0)
+        reach = np.linalg.norm(patch.points[:, :2] - centre[:2], axis=1).max()
+        step = 2 * p.cell
+        span = np.arange(-p.shift, p.shift + step / 2, step)
+        shifts = centre + np.stack(np.meshgrid(span, span, [0.0], indexing="ij"), -1).reshape(-1, 3)
+        angles = np.radians(np.arange(0.0, 360.0, p.angle_step_deg))
+        points = _subset(patch.points, self._COARSE_POINTS)
+        peaks = []
+        for shape in self.shapes:
+            too_wide = reach > shape.reach + patch.tolerance + p.shift
+            if too_wide or abs(top - shape.height) > p.height_slack + patch.tolerance:
+                continue
+            coarse = self._costs(patch, shape, angles, shifts, points)
+            peaks += [(cost, shape, angles[a], shifts[k]) for cost, a, k in self._distinct_turns(coarse, angles)]
+        peaks.sort(key=lambda peak: peak[0])
+        refined = [self._refined(patch, *peak[1:]) for peak in peaks[:p.max_candidates] if peak[0] <= p.max_cost]
+        return sorted((pose for pose in refined if pose[0] <= p.max_cost), key=lambda t: t[0])
+
+    def _distinct_turns(self, costs: np.ndarray, angles: np.ndarray) -> list:
+        """(cost, turn index, shift index) of the ``angles`` cheapest cells of ``costs`` (turns x shifts) whose
+        turns lie at least four steps apart."""
+        apart, out = 4 * np.radians(self.params.angle_step_deg), []
+        best = costs.min(axis=1)
+        for a in np.argsort(best):
+            if all(abs((angles[a] - angles[b] + np.pi) % (2 * np.pi) - np.pi) >= apart for _, b, _ in out):
+                out.append((float(best[a]), a, int(np.argmin(costs[a]))))
+                if len(out) == self.params.angles:
+                    break
         return out
+
+    def _refined(self, patch: Patch, shape: RestingShape, angle: float, shift: np.ndarray) -> tuple:
+        """(cost, model, T_table_model) of the cheapest pose within half a coarse step of ``angle`` and a
+        cell of ``shift``, in the fine steps."""
+        p = self.params
+        half = p.angle_step_deg / 2
+        turns = angle + np.radians(np.arange(-half, half + 1e-9, p.fine_angle_step_deg))
+        span = np.arange(-p.cell, p.cell + p.cell / 4, p.cell / 2)
+        moves = shift + np.stack(np.meshgrid(span, span, [0.0], indexing="ij"), -1).reshape(-1, 3)
+        fine = self._costs(patch, shape, turns, moves, _subset(patch.points, self._FINE_POINTS))
+        i, j = np.unravel_index(np.argmin(fine), fine.shape)
+        T = np.eye(4)
+        T[:3, :3], T[:3, 3] = _turns(turns[i:i + 1])[0], moves[j]
+        return float(fine[i, j]), shape.model, T @ shape.T_table_model
+
+    def _costs(self, patch: Patch, shape: RestingShape, angles: np.ndarray, shifts: np.ndarray,
+               points: np.ndarray) -> np.ndarray:
+        """(A, S) costs of ``shape`` turned by ``angles`` about its centre and moved to ``shifts`` (S, 3):
+        the patch's ``points`` (N, 3) off the model's surface, plus the silhouette's samples off the patch,
+        each as a mean of squares of distances truncated at the patch's tolerance, over its square."""
+        cap = patch.tolerance
+        # A model point is T_model_table Rz(-a) (q - s): the turned patch points less the turned shifts.
+        M = shape.T_model_table[:3, :3] @ _turns(-angles)
+        moved = np.einsum("aij,nj->ani", M, points)[:, None] - np.einsum("aij,sj->asi", M, shifts)[:, :, None]
+        on_model = np.minimum(self.fields[shape.model](moved + shape.T_model_table[:3, 3]), cap)
+        R = _turns(angles)[:, :2, :2]
+        posed = np.einsum("aij,mj->ami", R, shape.silhouette)[:, None] + shifts[None, :, None, :2]
+        past = np.minimum(patch.outside(posed), cap)
+        return ((on_model**2).mean(axis=-1) + (past**2).mean(axis=-1)) / cap**2

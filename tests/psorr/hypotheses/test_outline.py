@@ -1,4 +1,4 @@
-"""psorr.hypotheses.outline: poses from a part's outline on the table, on meshes built here."""
+"""psorr.hypotheses.outline: poses of parts resting on the table, from the patches they raise, on meshes built here."""
 
 from __future__ import annotations
 
@@ -75,4 +75,20 @@ def test_outline_params_are_checked():
         OutlineParams(cell=0.0)
     with pytest.raises(InvalidInputError, match="rests"):
         OutlineParams(rests=0)
-    assert not RecognizeParams().outline.enabled
+    with pytest.raises(InvalidInputError, match="min_standing_share"):
+        OutlineParams(min_standing_share=1.5)
+    assert RecognizeParams().outline.enabled
+
+
+def test_the_true_resting_pose_costs_least_and_a_wrong_model_more(library):
+    scene = mesh_scene(np.random.default_rng(1), PARTS, "single", names=["bar"])
+    matcher = OutlineMatcher(library.models, OutlineParams())
+    view = SceneView(scene.cloud)
+    T_cloud_table = table_frame(view.support_plane)
+    [patch] = list(matcher._patches(scene.cloud, view.support_plane, T_cloud_table))
+    poses = matcher._patch_poses(patch)
+    bar = library.names.index("bar")
+    assert poses[0][1] == bar
+    truth = np.linalg.inv(T_cloud_table) @ scene.instances[0].T_camera_model
+    best = min(_mean_offset(library.model("bar"), T, truth) for cost, m, T in poses if m == bar)
+    assert best < 0.1 * library.model("bar").diameter
