@@ -14,6 +14,7 @@ from psorr.decomposition.detail import DetailParams
 from psorr.decomposition.support_crop import SupportCropParams
 from psorr.errors import CloudFileError, InvalidInputError, PsorrError
 from psorr.hypotheses.orr import OrrParams
+from psorr.hypotheses.outline import OutlineParams
 from psorr.hypotheses.pairs import PairParams
 from psorr.hypotheses.single_cylinder import SingleCylinderParams
 from psorr.hypotheses.single_plane import SinglePlaneParams
@@ -44,6 +45,7 @@ __all__ = [
     "ModelLibrary",
     "OrientedBox",
     "OrrParams",
+    "OutlineParams",
     "PairParams",
     "PointCloud",
     "Primitive",

@@ -147,13 +147,11 @@ class SceneView:
 
     @cached_property
     def neighbour_depth(self) -> np.ndarray:
-        """(width x height,) the nearest measured depth at each pixel and its neighbours out to a Kinect
-        pixel's angle (the 3x3 pixels around it at 525 px; inf if none)."""
+        """(width x height,) the nearest measured depth at each pixel and its 8 neighbours (inf if none)."""
         from scipy.ndimage import minimum_filter
 
-        size = 2 * max(1, round(self.focal / KINECT_FOCAL)) + 1
         depth = self.depth.reshape(self.height, self.width)
-        return minimum_filter(np.where(np.isfinite(depth), depth, np.inf), size=size, mode="nearest").ravel()
+        return minimum_filter(np.where(np.isfinite(depth), depth, np.inf), size=3, mode="nearest").ravel()
 
     @cached_property
     def nearby_depth(self) -> np.ndarray:

@@ -14,7 +14,7 @@ import sys
 import numpy as np
 import pytest
 
-from psorr import AcceptParams, DetailParams, PairParams
+from psorr import AcceptParams, DetailParams, OutlineParams, PairParams
 from psorr.errors import InvalidInputError
 from psorr.io.clouds import write_cloud
 from psorr.recognize import RecognizeParams, Recognizer
@@ -164,7 +164,8 @@ def test_a_channel_is_fitted_from_its_pair_pose_as_well_as_from_where_the_slide_
 def test_what_stands_unexplained_gets_a_finer_second_look(library, catalog):
     # The peers benchmark's bushing scene of seed 0: at 8 mm voxels the 54 mm bushing's faces come out
     # as a cylinder of the wrong radius and planes merged with the table, and no pair of them matches.
-    # Its points stand on the table unexplained; decomposed again at 5 mm, they give the bushing.
+    # Its points stand on the table unexplained; decomposed again at 5 mm, they give the bushing. (The
+    # resting-pose search finds it too, so it is off here, where the second look is what is tested.)
     names = sorted(catalog)
     scene = workpiece_scene(np.random.default_rng(2000 + 10 * names.index("bushing")),
                             {"bushing": catalog["bushing"].load_mesh()}, ["bushing"])
@@ -173,8 +174,9 @@ def test_what_stands_unexplained_gets_a_finer_second_look(library, catalog):
         result = Recognizer(library, params=params).recognize(scene.cloud)
         return result, [d for d in result.detections if _matches(d, scene.instances[0], library, catalog)]
 
-    coarse_only, missed = found(RecognizeParams(detail=DetailParams(fine_voxel=None)))
-    both, hit = found(RecognizeParams())
+    no_rests = OutlineParams(enabled=False)
+    coarse_only, missed = found(RecognizeParams(detail=DetailParams(fine_voxel=None), outline=no_rests))
+    both, hit = found(RecognizeParams(outline=no_rests))
     assert not missed and len(hit) == 1 and len(both.detections) == 1
     assert both.stats.hypotheses > coarse_only.stats.hypotheses
 
