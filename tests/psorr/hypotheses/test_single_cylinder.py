@@ -6,6 +6,7 @@ import pytest
 
 from psorr.errors import InvalidInputError
 from psorr.geometry.rotations import from_rotation_vector
+from psorr.hypotheses.outline import OutlineParams
 from psorr.hypotheses.single_cylinder import SingleCylinderMatcher, SingleCylinderParams, axis_frame, cylinder_length
 from psorr.library.models import ModelLibrary
 from psorr.recognize import RecognizeParams, Recognizer
@@ -102,8 +103,10 @@ def test_a_pipe_tee_showing_only_its_run_as_a_cylinder_is_recognised(parts, seed
                 if d.model == "pipe_tee" and symmetric_add(model.points[::10], d.T_cloud_model, tee.T_camera_model,
                                                            catalog["pipe_tee"]) < 0.1 * model.diameter]
 
-    assert found(RecognizeParams())
-    assert not found(RecognizeParams(single_cylinder=SingleCylinderParams(enabled=False)))
+    # The resting-pose search finds some of these tees too (seed 28's), so it is off: the test is of the cylinder.
+    no_rests = OutlineParams(enabled=False)
+    assert found(RecognizeParams(outline=no_rests))
+    assert not found(RecognizeParams(single_cylinder=SingleCylinderParams(enabled=False), outline=no_rests))
 
 
 def test_a_tee_whose_branch_is_hidden_is_not_posed_from_its_run_alone(parts):
