@@ -28,7 +28,7 @@ class RecognizeParams:
     - ``detail``: the finer passes, over the decomposition's leftovers and what stands unexplained (PSORR);
     - ``pairs``: pose hypotheses from primitive pairs, screened by box verification (PSORR);
     - ``single_plane``, ``single_cylinder``: poses from one face or one long cylinder (PSORR);
-    - ``outline``: poses from a part's outline on the table, for parts too small to pair (PSORR; off by default);
+    - ``outline``: poses of parts resting on the table, searched over the patches they raise (PSORR; on by default);
     - ``psg``: PSG matching's cliques and QPBO (``method="psg"``);
     - ``orr``: the ORR baseline's random point pairs;
     - ``acceptance``: ICP, the point check's bars, and settling detections by the pixels they explain.
