@@ -43,7 +43,8 @@ class OutlineParams:
     refined in steps of ``fine_angle_step_deg`` and half a cell. A pose's cost is the mean square of
     the distances (truncated at the point check's tolerance, over its square) of the patch's points to
     the model and of the silhouette to the patch, summed; poses costing more than ``max_cost`` are
-    dropped (at 0.5, the points lie half a tolerance off on average both ways). The ``max_candidates``
+    dropped (at 0.5, the points lie half a tolerance off on average both ways), and so are those costing
+    more than ``max_cost_ratio`` times the patch's cheapest. The ``max_candidates``
     best poses of a scene, taken from its patches in turn, go on to acceptance.
     """
 
@@ -60,12 +61,14 @@ class OutlineParams:
     shift: float = 0.004
     angles: int = 2
     max_cost: float = 0.5
+    max_cost_ratio: float = 1.5
     max_candidates: int = 24
 
     def __post_init__(self):
         check.flag(self, "enabled")
         check.positive(self, "cell", "min_height", "min_area", "height_slack", "shift", unit=" metres")
         check.positive(self, "sigmas", "angle_step_deg", "fine_angle_step_deg", "max_cost")
+        check.within(self, "max_cost_ratio", low=1.0, high=float("inf"))
         check.within(self, "min_standing_share")
         check.whole(self, "rests", "angles", "max_candidates")
 
@@ -207,7 +210,8 @@ class OutlineMatcher:
             peaks += [(cost, shape, angles[a], shifts[k]) for cost, a, k in self._distinct_turns(coarse, angles)]
         peaks.sort(key=lambda peak: peak[0])
         refined = [self._refined(patch, *peak[1:]) for peak in peaks[:p.max_candidates] if peak[0] <= p.max_cost]
-        return sorted((pose for pose in refined if pose[0] <= p.max_cost), key=lambda t: t[0])
+        poses = sorted((pose for pose in refined if pose[0] <= p.max_cost), key=lambda t: t[0])
+        return [pose for pose in poses if pose[0] <= p.max_cost_ratio * poses[0][0]]
 
     def _distinct_turns(self, costs: np.ndarray, angles: np.ndarray) -> list:
         """(cost, turn index, shift index) of the ``angles`` cheapest cells of ``costs`` (turns x shifts) whose
