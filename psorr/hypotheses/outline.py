@@ -116,6 +116,11 @@ def _turns(angles: np.ndarray) -> np.ndarray:
     return R
 
 
+def _square(centre: np.ndarray, span: np.ndarray) -> np.ndarray:
+    """(S, 3) the points ``centre`` (3,) + (a, b, 0) for every a and b in ``span``: shifts on the table."""
+    return centre + np.stack(np.meshgrid(span, span, [0.0], indexing="ij"), -1).reshape(-1, 3)
+
+
 def _subset(points: np.ndarray, count: int) -> np.ndarray:
     """At most ``count`` of ``points``, evenly through them (no draw: the same patch gives the same poses)."""
     return points[np.linspace(0, len(points) - 1, min(count, len(points))).astype(np.int64)]
@@ -198,7 +203,7 @@ class OutlineMatcher:
         reach = np.linalg.norm(patch.points[:, :2] - centre[:2], axis=1).max()
         step = 2 * p.cell
         span = np.arange(-p.shift, p.shift + step / 2, step)
-        shifts = centre + np.stack(np.meshgrid(span, span, [0.0], indexing="ij"), -1).reshape(-1, 3)
+        shifts = _square(centre, span)
         angles = np.radians(np.arange(0.0, 360.0, p.angle_step_deg))
         points = _subset(patch.points, self._COARSE_POINTS)
         peaks = []
@@ -232,7 +237,7 @@ class OutlineMatcher:
         half = p.angle_step_deg / 2
         turns = angle + np.radians(np.arange(-half, half + 1e-9, p.fine_angle_step_deg))
         span = np.arange(-p.cell, p.cell + p.cell / 4, p.cell / 2)
-        moves = shift + np.stack(np.meshgrid(span, span, [0.0], indexing="ij"), -1).reshape(-1, 3)
+        moves = _square(shift, span)
         fine = self._costs(patch, shape, turns, moves, _subset(patch.points, self._FINE_POINTS))
         i, j = np.unravel_index(np.argmin(fine), fine.shape)
         T = np.eye(4)

@@ -148,18 +148,20 @@ class SceneView:
     @cached_property
     def neighbour_depth(self) -> np.ndarray:
         """(width x height,) the nearest measured depth at each pixel and its 8 neighbours (inf if none)."""
-        from scipy.ndimage import minimum_filter
-
-        depth = self.depth.reshape(self.height, self.width)
-        return minimum_filter(np.where(np.isfinite(depth), depth, np.inf), size=3, mode="nearest").ravel()
+        return self._nearest_within(1)
 
     @cached_property
     def nearby_depth(self) -> np.ndarray:
         """(width x height,) the nearest measured depth within SHADOW_REACH pixels of each pixel (inf if none)."""
+        return self._nearest_within(max(1, round(SHADOW_REACH * self.focal / KINECT_FOCAL)))
+
+    def _nearest_within(self, reach: int) -> np.ndarray:
+        """(width x height,) the least depth in the square of ``reach`` pixels around each pixel; the buffer
+        holds inf where nothing was measured, so those read inf unless a neighbour measured."""
         from scipy.ndimage import minimum_filter
 
-        size = 2 * max(1, round(SHADOW_REACH * self.focal / KINECT_FOCAL)) + 1
-        return minimum_filter(self.depth.reshape(self.height, self.width), size=size, mode="nearest").ravel()
+        depth = self.depth.reshape(self.height, self.width)
+        return minimum_filter(depth, size=2 * reach + 1, mode="nearest").ravel()
 
     @cached_property
     def measured_near(self) -> np.ndarray:
