@@ -42,7 +42,7 @@ demo: setup
 	$(BIN)/python -m psorr.demo
 	$(BIN)/psorr-sim run tasks/demo.yaml --episodes 2 --seed 0 --occluder on --record out/demo
 
-# The benchmarks compare with peers in one run: the bench extra brings OpenCV's PPF and numba.
+# The benchmarks compare with peers in one run: the bench extra brings OpenCV's PPF.
 $(BENCH_STAMP): pyproject.toml setup.py | $(STAMP)
 	$(BIN)/pip install -q -e ".[bench]"
 	touch $(BENCH_STAMP)

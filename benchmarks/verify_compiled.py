@@ -20,8 +20,7 @@ and timing each recorded call again in numpy (the library's code) and compiled w
 scores and point counts). It prints microseconds per hypothesis and the ORR / PSORR ratio for
 numpy against numpy, compiled against compiled, and compiled PSORR against numpy ORR.
 
-Needs numba, in the bench extra (pip install -e ".[bench]"). Writes
-benchmarks/results/verify_compiled.{md,json,png}.
+Writes benchmarks/results/verify_compiled.{md,json,png}.
 
     python benchmarks/verify_compiled.py [--seeds 1] [--repeats 5] [--out DIR]
 """
@@ -34,6 +33,8 @@ import sys
 from pathlib import Path
 
 import _single_core  # noqa: F401  (must precede numpy)
+import compiled_boxes
+import compiled_points
 import numpy as np
 from table1 import OBJECTS
 from table1_views import table1_cases
@@ -49,12 +50,6 @@ from psorr import ModelLibrary, Recognizer
 from psorr.hypotheses.primitive_match import RADIUS_TOLERANCE
 from psorr.synthetic.catalog import load_catalog
 from psorr.verification.box_score import _COS_AGREE, _concatenated
-
-try:
-    import compiled_boxes
-    import compiled_points
-except ImportError as exc:  # numba is a bench extra
-    raise SystemExit(f"verify_compiled.py needs numba ({exc}): pip install -e '.[bench]'") from None
 
 ROOT = Path(__file__).resolve().parents[1]
 TARGET = 50.0

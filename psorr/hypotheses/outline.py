@@ -133,8 +133,10 @@ class OutlineMatcher:
     _COARSE_POINTS, _FINE_POINTS = 120, 300  # of the patch
 
     def __init__(self, models, params: OutlineParams, check: CheckParams | None = None):
+        from psorr.hypotheses.resting_costs import resting_costs  # numba: imported by the search that needs it
         from psorr.synthetic.resting import stable_rests
 
+        self._resting_costs = resting_costs
         self.params, self.check, self.shapes, self.fields = params, check or CheckParams(), [], []
         self.truncation = 2 * self.check.min_tolerance  # holds the point check's tolerance out to 2 m and more
         for index, model in enumerate(models):
@@ -249,12 +251,9 @@ class OutlineMatcher:
         """(A, S) costs of ``shape`` turned by ``angles`` about its centre and moved to ``shifts`` (S, 3):
         the patch's ``points`` (N, 3) off the model's surface, plus the silhouette's samples off the patch,
         each as a mean of squares of distances truncated at the patch's tolerance, over its square."""
-        cap = patch.tolerance
         # A model point is T_model_table Rz(-a) (q - s): the turned patch points less the turned shifts.
-        M = shape.T_model_table[:3, :3] @ _turns(-angles)
-        moved = np.einsum("aij,nj->ani", M, points)[:, None] - np.einsum("aij,sj->asi", M, shifts)[:, :, None]
-        on_model = np.minimum(self.fields[shape.model](moved + shape.T_model_table[:3, 3]), cap)
-        R = _turns(angles)[:, :2, :2]
-        posed = np.einsum("aij,mj->ami", R, shape.silhouette)[:, None] + shifts[None, :, None, :2]
-        past = np.minimum(patch.outside(posed), cap)
-        return ((on_model**2).mean(axis=-1) + (past**2).mean(axis=-1)) / cap**2
+        model, outside = self.fields[shape.model], patch.outside
+        return self._resting_costs(shape.T_model_table[:3, :3] @ _turns(-angles), shape.T_model_table[:3, 3],
+                                   points, shifts, _turns(angles)[:, :2, :2], shape.silhouette,
+                                   model.distances, model.low, model.cell, outside.distances, outside.low,
+                                   outside.cell, patch.tolerance)

@@ -2,7 +2,6 @@
 
 The benchmark's ratios mean something only if the compiled box scores and point checks are the same
 computations: here on a seeded 3-part Kinect scene, at poses around the true ones and far off them.
-Skips without numba (pip install -e ".[bench]"), as the OpenCV peer tests skip without OpenCV.
 """
 
 from __future__ import annotations
@@ -14,16 +13,14 @@ import pytest
 from paths import BENCHMARKS
 from scipy.spatial.transform import Rotation
 
-pytest.importorskip("numba")
-
-from psorr.decomposition import DecomposeParams, decompose  # noqa: E402
-from psorr.geometry.rotations import from_rotation_vector  # noqa: E402
-from psorr.hypotheses.primitive_match import RADIUS_TOLERANCE  # noqa: E402
-from psorr.synthetic.catalog import load_catalog  # noqa: E402
-from psorr.synthetic.workpiece_scenes import workpiece_scene  # noqa: E402
-from psorr.verification.box_score import _COS_AGREE, PrimitiveArrays, _concatenated, box_scores  # noqa: E402
-from psorr.verification.point_check import CheckParams, check_poses  # noqa: E402
-from psorr.verification.scene_view import SceneView  # noqa: E402
+from psorr.decomposition import DecomposeParams, decompose
+from psorr.geometry.rotations import from_rotation_vector
+from psorr.hypotheses.primitive_match import RADIUS_TOLERANCE
+from psorr.synthetic.catalog import load_catalog
+from psorr.synthetic.workpiece_scenes import workpiece_scene
+from psorr.verification.box_score import _COS_AGREE, PrimitiveArrays, _concatenated, box_scores
+from psorr.verification.point_check import CheckParams, check_poses
+from psorr.verification.scene_view import SceneView
 
 sys.path.insert(0, str(BENCHMARKS))
 import compiled_boxes  # noqa: E402
