@@ -27,8 +27,8 @@ def resting_costs(M: np.ndarray, t: np.ndarray, points: np.ndarray, shifts: np.n
                   patch_field: np.ndarray, patch_low: np.ndarray, patch_cell: float, cap: float) -> np.ndarray:
     """(A, S) costs of a resting shape turned A ways and moved S ways over a patch.
 
-    Pose (a, s) takes a patch point q (table frame) to the model point M[a] q - M[a] shifts[s] + t, and a
-    silhouette sample p to R[a] p + shifts[s][:2]. Its cost is the mean square of the model field at the
+    Pose (a, s) takes a patch point q (table frame) to the model point ``M[a] q - M[a] shifts[s] + t``, and a
+    silhouette sample p to ``R[a] p + shifts[s, :2]``. Its cost is the mean square of the model field at the
     patch's ``points`` (N, 3), plus that of the patch field at the ``silhouette`` (K, 2), each distance
     capped at ``cap`` and the sum divided by cap^2.
 
