@@ -33,19 +33,20 @@ from psorr.verification.point_check import CheckParams, depth_tolerance
 class OutlineParams:
     """Resting-pose hypotheses; distances in metres, areas in m^2, angles in degrees.
 
-    A point stands on the table when it is higher than ``sigmas`` x the sensor's depth sigma at its
-    depth, and at least ``min_height``. Patches are drawn on a grid of ``cell`` (also the distance
-    fields' cell); a patch of at least ``min_area`` counts when at least ``min_standing_share`` of the
-    points in its cells stand (noise lifts scattered table points, an object all of them). Each
-    model's ``rests`` most probable resting poses whose height is within ``height_slack`` of the
-    patch's top are searched: turns in steps of ``angle_step_deg`` and shifts of the centre within
+    A point stands on the table when it is higher than ``sigmas`` x the sensor's depth sigma at its depth,
+    and at least ``min_height``, and no higher than any model rests (the tallest resting shape, plus
+    ``height_slack`` and the depth tolerance): higher points are something else's. Patches are drawn on a
+    grid of ``cell`` (also the distance fields' cell); a patch of at least ``min_area`` counts when at least
+    ``min_standing_share`` of the points in its cells stand (noise lifts scattered table points, an object
+    all of them). Each model's ``rests`` most probable resting poses whose height is within ``height_slack``
+    of the patch's top are searched: turns in steps of ``angle_step_deg`` and shifts of the centre within
     ``shift`` in steps of twice the cell, then the ``angles`` best turns at least four steps apart are
-    refined in steps of ``fine_angle_step_deg`` and half a cell. A pose's cost is the mean square of
-    the distances (truncated at the point check's tolerance, over its square) of the patch's points to
-    the model and of the silhouette to the patch, summed; poses costing more than ``max_cost`` are
-    dropped (at 0.5, the points lie half a tolerance off on average both ways), and so are those costing
-    more than ``max_cost_ratio`` times the patch's cheapest. The ``max_candidates``
-    best poses of a scene, taken from its patches in turn, go on to acceptance.
+    refined in steps of ``fine_angle_step_deg`` and half a cell. A pose's cost is the mean square of the
+    distances (truncated at the point check's tolerance, over its square) of the patch's points to the model
+    and of the silhouette to the patch, summed; poses costing more than ``max_cost`` are dropped (at 0.5,
+    the points lie half a tolerance off on average both ways), and so are those costing more than
+    ``max_cost_ratio`` times the patch's cheapest. The ``max_candidates`` best poses of a scene, taken from
+    its patches in turn, go on to acceptance.
     """
 
     enabled: bool = True
@@ -171,6 +172,11 @@ class OutlineMatcher:
         points = cloud.points[cloud.valid_mask]
         height = points @ plane[:3] + plane[3]
         standing = height > np.maximum(p.min_height, p.sigmas * KINECT_V1.depth_sigma(points[:, 2]))
+        # Higher than any resting model reaches, a point is something else's (an arm reaching in): it neither
+        # joins a patch nor counts among its cells' points, or a part under the arm would join the arm's patch.
+        tallest = max(shape.height for shape in self.shapes) + p.height_slack
+        beyond = height > tallest + depth_tolerance(points[:, 2], self.check)
+        standing &= ~beyond
         if standing.sum() < 3:
             return
         T_table_cloud = np.linalg.inv(T_cloud_table)
@@ -179,7 +185,7 @@ class OutlineMatcher:
         low = up[:, :2].min(axis=0) - p.cell
         shape = tuple(np.floor((up[:, :2].max(axis=0) + p.cell - low) / p.cell).astype(np.int64) + 1)
         cells = np.floor((xy - low) / p.cell).astype(np.int64)
-        inside = ((cells >= 0) & (cells < shape)).all(axis=1)
+        inside = ((cells >= 0) & (cells < shape)).all(axis=1) & ~beyond
         every = np.bincount(np.ravel_multi_index(tuple(cells[inside].T), shape), minlength=np.prod(shape))
         raised = np.bincount(np.ravel_multi_index(tuple(cells[standing].T), shape), minlength=np.prod(shape))
         labels, count = ndimage.label(ndimage.binary_opening(ndimage.binary_closing(raised.reshape(shape) > 0,

@@ -92,3 +92,25 @@ def test_the_true_resting_pose_costs_least_and_a_wrong_model_more(library):
     truth = np.linalg.inv(T_cloud_table) @ scene.instances[0].T_camera_model
     best = min(_mean_offset(library.model("bar"), T, truth) for cost, m, T in poses if m == bar)
     assert best < 0.1 * library.model("bar").diameter
+
+
+def test_a_plate_under_an_arm_is_its_own_patch_and_still_gets_its_pose(library):
+    """Points higher than any model rests (an arm reaching in) over half of the plate: in the table's plane
+    they overlap the plate's cells, and joined to its patch they would make it 15 cm high."""
+    from psorr.types import PointCloud
+
+    scene = mesh_scene(np.random.default_rng(0), PARTS, "single", names=["plate"])
+    view = SceneView(scene.cloud)
+    T_table_cloud = np.linalg.inv(table_frame(view.support_plane))
+    plate = scene.cloud.points[scene.cloud.labels.reshape(-1) == 1]
+    local = plate @ T_table_cloud[:3, :3].T + T_table_cloud[:3, 3]
+    arm = local[local[:, 0] > np.median(local[:, 0])] + [0.0, 0.0, 0.15]
+    T_cloud_table = np.linalg.inv(T_table_cloud)
+    points = scene.cloud.points[scene.cloud.valid_mask]
+    cloud = PointCloud(np.vstack([points, arm @ T_cloud_table[:3, :3].T + T_cloud_table[:3, 3]]))
+    matcher = OutlineMatcher(library.models, OutlineParams(enabled=True))
+    found = matcher.candidates(cloud, SceneView(cloud))
+    model = library.model("plate")
+    offsets = [_mean_offset(model, c.T_cloud_model, scene.instances[0].T_camera_model)
+               for c in found.candidates if c.model == library.names.index("plate")]
+    assert offsets and min(offsets) < 0.1 * model.diameter
