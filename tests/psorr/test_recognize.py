@@ -102,12 +102,14 @@ def test_clutter_recall_and_false_positives(library, catalog):
 def test_a_second_pairing_round_finds_a_part_the_first_crowded_out(library, catalog):
     # Seed 1003 with the occluder (the peers benchmark's 4th cluttered scene): the bushing's few pair
     # votes lose to pairs across the other parts until those parts are explained and leave the pairing.
-    # Without the finer second look, which finds it after one round too.
+    # Without the finer second look and the resting-pose search, which find it after one round too (the
+    # search since the arm's points no longer join the bushing's patch).
     scene = _occluded_clutter(catalog, 3)
     bushing = next(inst for inst in scene.instances if inst.name == "bushing")
 
     def bushing_found(rounds):
-        params = RecognizeParams(pairs=PairParams(pair_rounds=rounds), detail=DetailParams(fine_voxel=None))
+        params = RecognizeParams(pairs=PairParams(pair_rounds=rounds), detail=DetailParams(fine_voxel=None),
+                                 outline=OutlineParams(enabled=False))
         result = Recognizer(library, params=params).recognize(scene.cloud)
         return result, any(_matches(d, bushing, library, catalog) for d in result.detections)
 
