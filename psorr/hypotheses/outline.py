@@ -174,8 +174,10 @@ class OutlineMatcher:
         standing = height > np.maximum(p.min_height, p.sigmas * KINECT_V1.depth_sigma(points[:, 2]))
         # Higher than any resting model reaches, a point is something else's (an arm reaching in): it neither
         # joins a patch nor counts among its cells' points, or a part under the arm would join the arm's patch.
+        # The tolerance is looked up only for the few points above the tallest rest, not the whole image.
         tallest = max(shape.height for shape in self.shapes) + p.height_slack
-        beyond = height > tallest + depth_tolerance(points[:, 2], self.check)
+        beyond = height > tallest
+        beyond[beyond] = height[beyond] > tallest + depth_tolerance(points[beyond, 2], self.check)
         standing &= ~beyond
         if standing.sum() < 3:
             return
