@@ -5,7 +5,8 @@ drives a :class:`sim.episode.Episode` one decision at a time. After every execut
 robot looks at the cell again (``Episode.look``), so the observation always describes the latest
 look, and a pick always grasps from the pose that look returned (``Episode.estimate``).
 
-Action ``Discrete(n + 1)`` for a task of n parts: ``i < n`` picks the task's i-th part, ``n`` waits
+Action ``Discrete(n + 1)`` for a task of n parts (each instance of a part counts: a mesh part with
+``count: 2`` is two, in the order ``World.workpieces`` lists them): ``i < n`` picks the i-th, ``n`` waits
 ``WAIT_S`` and looks again. A pick is refused, without moving anything or advancing the
 simulation (the observation stays the same look), when the part was picked already, when the
 latest look found someone reaching in, or when that look returned no pose of the part that
@@ -24,7 +25,8 @@ Observation (a dict; part i is the task's i-th part; world frame, metres):
   no picture (the simulator's truth replaces recognition), so their depth is all zeros: rendering
   one would cost ~1 s per reset and ~0.3 s per step on this CPU for a picture nothing uses.
 
-Reward: +1 for a grasp held through the transport, +1 for a part seated in its fixture, -0.01
+Reward: +1 for a grasp held through the transport, +1 for a part placed (seated in its fixture, or at
+rest in the tote), -0.01
 per wait, -0.1 per refused pick. ``terminated`` once every part has had its pick; ``truncated``
 after ``max_steps`` actions, once the simulated time passes ``MAX_EPISODE_S``, or when the workspace
 stays blocked (``info["gave_up"]`` says which); the parts left are then given up in the episode. Made
@@ -54,6 +56,7 @@ from sim.skills.grasp_planning import upright_equivalent
 from sim.skills.judging import REST_TOL, PickResult
 from sim.skills.perception import Estimate, Look
 from sim.world import World, WorldConfig, build_world
+from sim.world.parts import instance_names
 
 DEFAULT_TASK = WorldConfig()  # the demo cell: tasks/demo.yaml spells out these defaults
 GRASP_REWARD, PLACE_REWARD, WAIT_REWARD, REFUSED_REWARD = 1.0, 1.0, -0.01, -0.1
@@ -94,7 +97,7 @@ class PickPlaceEnv(gym.Env):
             raise SimInputError(f"max_steps must be a positive int or None, got {max_steps!r}")
         self.config = replace(_world_config(task), occluder=bool(occluder))
         self.poses, self.occluder, self.render_mode, self.max_steps = poses, bool(occluder), render_mode, max_steps
-        self.parts = self.config.workpieces
+        self.parts = tuple(instance_names(self.config))
         n, cfg = len(self.parts), self.config
         hx, hy = (v / 2 + EDGE_MARGIN for v in cfg.table_size)
         low = np.tile(np.array([-hx, -hy, 0.0, -1, -1, -1, -1], np.float32), (n, 1))
@@ -199,8 +202,8 @@ class PickPlaceEnv(gym.Env):
         self._looks += 1
         # Only a part still waiting has a pose to pick from: a placed one, in its fixture, is no longer pickable.
         self._look = look
-        self._estimates = {part: self.episode.estimate(look, part) if part in self.episode.remaining else None
-                           for part in self.parts}
+        assigned = self.episode.estimates(look)
+        self._estimates = {part: assigned.get(part) for part in self.parts}
 
     def _refusal(self, part: str) -> str:
         """Why a pick of ``part`` now would be refused ("" if it would not)."""

@@ -7,7 +7,8 @@ simulator's true poses (and, with the human about, only checks whether someone i
 - someone is reaching over the table: wait and look again;
 - no remaining part was returned with a score of at least ``MIN_SCORE`` (hidden, or the
   recognizer is unsure): wait and look again, up to ``MAX_BLIND_LOOKS`` looks in a row;
-- otherwise pick the first remaining part, in task order, from the pose that look returned.
+- otherwise pick the first remaining part, in task order, from the pose that look returned (of a part
+  placed several times, the instance nearest the pose; see :meth:`Episode.estimates`).
 
 A part is picked at most once. While the arm moves, the monitor stops it whenever someone
 reaches in (:mod:`sim.control.cell`). A look costs ``THINK_S`` of simulated time, during which the arm
@@ -40,6 +41,7 @@ MAX_BLIND_LOOKS = 5  # looks in a row with nothing pickable before the rest of t
 WAIT_S = 0.5  # s waited before looking again
 THINK_S = 0.5  # s of simulated time a look (render and recognition) takes
 MAX_EPISODE_S = 240.0  # s of simulated time after which the remaining parts are given up
+PLACED_RADIUS = 0.02  # m: a pose this near a filled fixture's is the part placed there (placing is within 5 mm)
 
 
 @dataclass(frozen=True)
@@ -119,7 +121,10 @@ class Episode:
             watched = self.cell.monitor is not None
             intruding = self.perception.monitor_intruding(data, self.cell.holding) if watched else 0
             occupied = watched and intruding >= MONITOR_OCCUPIED
-            truth = {} if occupied else {p: (Estimate(self.world.body_pose(p), 1.0),) for p in self.remaining}
+            truth = {}
+            for p in () if occupied else self.remaining:
+                truth.setdefault(self.world.part_types[p], []).append(Estimate(self.world.body_pose(p), 1.0))
+            truth = {kind: tuple(estimates) for kind, estimates in truth.items()}
             look = Look(None, (), MappingProxyType(truth), intruding, occupied)
         self.looks += 1
         self.occupied_looks += look.occupied
@@ -129,12 +134,42 @@ class Episode:
         return look
 
     def estimate(self, look: Look, part: str) -> Estimate | None:
-        """The estimate to grasp ``part`` from: its best detection in ``look`` that scores at least
-        MIN_SCORE and stands upright on the table (parts rest there; anything else is a mistake)."""
-        for estimate in look.estimates.get(part, ()):
-            if estimate.score >= MIN_SCORE and resting_on_table(self.world, estimate.T_world_part, part):
-                return estimate
-        return None
+        """The estimate to grasp ``part`` (a body) from, as :meth:`estimates` assigns them; None if it has none."""
+        return self.estimates(look).get(part)
+
+    def estimates(self, look: Look) -> dict[str, Estimate]:
+        """The remaining bodies' estimates in ``look``: each part's detections that score at least MIN_SCORE and
+        stand upright on the table (parts rest there; anything else is a mistake), best first, each given to
+        the nearest remaining instance of its part that has none yet.
+
+        Which instance a pose is of is read from the simulator: it names the body the pick is graded against
+        and whose fixture it fills (the instances' fixtures are alike). The robot moves on the pose alone."""
+        out: dict[str, Estimate] = {}
+        for kind, found in look.estimates.items():
+            free = [p for p in self.remaining if self.world.part_types[p] == kind]
+            for estimate in found:
+                if not free:
+                    break
+                if self._already_placed(estimate.T_world_part):
+                    continue
+                if estimate.score >= MIN_SCORE and resting_on_table(self.world, estimate.T_world_part, free[0]):
+                    at = estimate.T_world_part[:3, 3]
+                    body = min(free, key=lambda p: np.linalg.norm(self.world.body_pose(p)[:3, 3] - at))
+                    out[body] = estimate
+                    free.remove(body)
+        return out
+
+    def _already_placed(self, T_world_part: np.ndarray) -> bool:
+        """Whether a pose lies where the robot has put a part: in the tote, or on a fixture it filled (the robot
+        knows its places; a part of a kind placed there may be seen again, and is not to be picked twice)."""
+        world, at = self.world, T_world_part[:3, 3]
+        if world.tote is not None:
+            inside = np.linalg.inv(world.T_world_tote)[:2] @ np.append(at, 1.0)
+            if np.all(np.abs(inside) <= world.tote.half_inside + world.config.tote_wall[0]):
+                return True
+        filled = [world.T_world_fixtures[p.part][:3, 3] for p in self.picks
+                  if p.grasped and p.part in world.T_world_fixtures]
+        return any(np.linalg.norm(at[:2] - F[:2]) < PLACED_RADIUS for F in filled)
 
     def wait(self, seconds: float = WAIT_S) -> None:
         self.cell.hold(seconds)
@@ -171,7 +206,8 @@ class Episode:
                 if look.occupied:
                     self.wait()
                     continue
-                choice = next(((p, e) for p in self.remaining if (e := self.estimate(look, p)) is not None), None)
+                assigned = self.estimates(look)
+                choice = next(((p, assigned[p]) for p in self.remaining if p in assigned), None)
                 if choice is None:
                     blind += 1
                     if blind >= MAX_BLIND_LOOKS:

@@ -64,3 +64,13 @@ class RecordingError(SimError):
 
 class ResetNeededError(SimError):
     """The env was stepped or rendered before :meth:`sim.env.PickPlaceEnv.reset`."""
+
+
+class PartMeshError(SimError, CloudFileError):
+    """A mesh a task names cannot become a part of the cell (unreadable, not closed, too small for the sensor,
+    too wide for the gripper from every side); the message names the file, the reason and the fix."""
+
+
+class CollisionHullError(SimError, CloudFileError):
+    """A mesh's collision hulls cannot be derived: CoACD is not installed, failed, or took too long
+    (:func:`sim.parts.collision.collision_hulls`); the message names the mesh file, the reason and the fix."""

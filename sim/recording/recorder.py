@@ -123,8 +123,8 @@ class EpisodeRecorder:
         else:  # the oracle: no frame, the true poses; draw them on the camera's RGB
             rgb, depth_shade = self._render(world, data, world.camera_name), None
             T_camera_world = np.linalg.inv(world.T_world_camera)
-            models = [(part, ests[0].score, self._points(world, None, part), T_camera_world @ ests[0].T_world_part)
-                      for part, ests in look.estimates.items()]
+            models = [(part, e.score, self._points(world, None, part), T_camera_world @ e.T_world_part)
+                      for part, ests in look.estimates.items() for e in ests]
         scale = rgb.shape[1] / world.config.intrinsics.width
         overlays = tuple(ModelOverlay(name, float(score), project_points(pts, T, world, scale))
                          for name, score, pts, T in models)
@@ -192,14 +192,15 @@ class EpisodeRecorder:
         return np.asarray(strip)
 
     def _points(self, world: World, library, part: str) -> np.ndarray:
-        """(<= MODEL_POINTS, 3) surface points of ``part`` in its model frame (metres)."""
+        """(<= MODEL_POINTS, 3) surface points of the part ``part`` (not a body) in its model frame (metres)."""
         if part not in self._model_points:
             if library is not None:
                 pts = library.model(part).points
             else:
                 import trimesh
 
-                pts = trimesh.sample.sample_surface(world.catalog[part].load_mesh(), MODEL_POINTS, seed=0)[0]
+                info = world.catalog[world.bodies_of(part)[0]]
+                pts = trimesh.sample.sample_surface(info.load_mesh(), MODEL_POINTS, seed=0)[0]
             self._model_points[part] = np.asarray(pts)[:: max(1, len(pts) // MODEL_POINTS)]
         return self._model_points[part]
 

@@ -1,11 +1,11 @@
-"""Grasp planning: which catalog grasp, approached how, reaching which tool poses.
+"""Grasp planning: which of a part's grasps, approached how, reaching which tool poses.
 
-:func:`plan_grasp` takes a part's pose estimate and returns the first grasp (catalog order, read by
-:mod:`sim.skills.grasps`) that
+:func:`plan_grasp` takes a part's pose estimate and returns the first of the part's grasps
+(``World.grasps``: the catalog's, or those synthesised from a user's mesh, best first) that
 is narrower than the gripper, not a thin-wall pinch, approached from above, and whose pre-grasp,
 grasp, above-fixture and place poses the IK reaches; grasps whose pads fit inside the fixture's
 pocket come first, the others are released above the pocket's walls. Nothing here reads the
-simulator's truth: only the estimate, the catalog and the robot's own kinematics.
+simulator's truth: only the estimate, the part's mesh and grasps, and the robot's own kinematics.
 """
 
 from __future__ import annotations
@@ -15,15 +15,18 @@ from dataclasses import dataclass
 
 import mujoco
 import numpy as np
+import trimesh
 
 from sim.control.cell import ArmCell
 from sim.errors import UnreachableTargetError
-from sim.skills.grasps import Grasp, load_grasps
+from sim.skills.grasps import Grasp
+from sim.skills.part_geometry import hull_points
 
 PRE_GRASP = 0.10  # m back along -approach before the approach
 LIFT = 0.10  # m the tool rises after closing; the transport runs at that height
 PAD_CLEARANCE = 0.0015  # m kept between the pads' lower ends and the table when grasping
 WALL_CLEARANCE = 0.002  # m between the pads' lower ends and the fixture walls' tops at release
+TOTE_DROP = 0.004  # m above the tote's floor a part is let go: set down, not dropped, yet clear of the floor
 
 
 def angle_deg(R: np.ndarray) -> float:
@@ -105,16 +108,17 @@ def pads_clear_fixture(cell: ArmCell, info, T_fix_tool: np.ndarray, width: float
 
 
 def plan_grasp(cell: ArmCell, part: str, T_est: np.ndarray) -> GraspPlan | NoGrasp:
-    """The first reachable grasp, in catalog order, preferring those whose pads fit the fixture's pocket."""
+    """The first reachable grasp, in the part's order, preferring those whose pads fit the fixture's pocket."""
     world = cell.world
     info = world.catalog[part]
-    T_fix = world.T_world_fixtures[part]
+    to_tote = world.places.get(part) == "tote"
+    T_fix = None if to_tote else world.T_world_fixtures[part]
     # Plan from home whatever the arm's pose: from the look pose, panned aside, the local IK can
     # wander into a wound-up configuration the arm cannot get to.
     q0 = cell.data.qpos.copy()
     q0[cell.qadr] = cell.model.key(cell.cfg.home_key).qpos[cell.qadr]
     reasons, candidates = [], []
-    for index, grasp in enumerate(load_grasps().get(part, ())):
+    for index, grasp in enumerate(world.grasps[part]):
         if grasp.width >= world.arm.max_opening:
             reasons.append(f"{grasp.name}: {grasp.width * 1e3:.0f} mm too wide")
             continue
@@ -131,12 +135,15 @@ def plan_grasp(cell: ArmCell, part: str, T_est: np.ndarray) -> GraspPlan | NoGra
             # Keep the pads' lower ends off the table: grasp higher on the same faces if need be.
             short = world.table_top + PAD_CLEARANCE - (T_grasp[2, 3] - cell.pad_reach)
             if short > 0:
-                if grasp.point[2] + short > info.bounds()[1, 2] - 0.002:
+                if _above_the_top(world, part, info, grasp, T_est, T_grasp, short, world.config.resting == "any",
+                                  cell.pad_reach):
                     reasons.append(f"{grasp.name}: the pads would hit the table")
                     break
                 T_grasp = shift(T_grasp, [0, 0, short])
             T_part_tool = np.linalg.inv(T_est) @ T_grasp
-            for seat in seat_options(cell, info, T_fix, T_part_tool, grasp.width, T_grasp):
+            seats = [tote_seat(world, part, T_est, T_part_tool)] if to_tote else \
+                seat_options(cell, info, T_fix, T_part_tool, grasp.width, T_grasp)
+            for seat in seats:
                 candidates.append(((not seat.pads_clear, index, seat.turn_deg), grasp, flip, T_grasp, seat))
     candidates.sort(key=lambda c: c[0])
     for _, grasp, flip, T_grasp, seat in candidates:
@@ -156,6 +163,37 @@ def plan_grasp(cell: ArmCell, part: str, T_est: np.ndarray) -> GraspPlan | NoGra
             continue
         return GraspPlan(grasp, T_grasp, q_pre, q_grasp, PlacePlan(T_place, q_above, seat.pads_clear))
     return NoGrasp("; ".join(reasons) or "the part has no grasps")
+
+
+def _above_the_top(world, part: str, info, grasp: Grasp, T_est: np.ndarray, T_grasp: np.ndarray, short: float,
+                   any_way: bool, pad_reach: float) -> bool:
+    """Whether raising the grasp by ``short`` (m) to keep the pads off the table would put it within 2 mm of the
+    part's top (the model's top for a part resting upright), or, for a part resting any way, the pads' lower ends
+    (``pad_reach`` below the tool) within 2 mm of its hull's highest point at ``T_est``."""
+    if not any_way:
+        return grasp.point[2] + short > info.bounds()[1, 2] - 0.002
+    # A synthesised grasp may hold a low part by the pads' lower ends: only they must still reach its sides.
+    return T_grasp[2, 3] + short - pad_reach > float(hull_points(world, T_est, part)[:, 2].max()) - 0.002
+
+
+def tote_seat(world, part: str, T_est: np.ndarray, T_part_tool: np.ndarray) -> SeatOption:
+    """The tool pose that sets the held part down in its slot of the tote as it lay on the table, turned about
+    the vertical (by the least turn) so that its footprint's long side lies along the tote's x, its footprint's
+    centre over the slot and ``TOTE_DROP`` above the floor."""
+    corners = hull_points(world, T_est, part)
+    T_rect, sides = trimesh.bounds.oriented_bounds_2D(corners[:, :2])
+    long_axis = T_rect[0, :2] if sides[0] >= sides[1] else T_rect[1, :2]
+    tote_x = world.T_world_tote[:2, 0]
+    turn = math.atan2(tote_x[1], tote_x[0]) - math.atan2(long_axis[1], long_axis[0])
+    turn = (turn + math.pi / 2) % math.pi - math.pi / 2  # a rectangle is the same turned by half a turn
+    centre = np.linalg.solve(T_rect[:2, :2], -T_rect[:2, 2])  # the rectangle's centre, world x, y
+    slot = world.T_world_tote[:3, :3] @ np.append(world.tote.slots[part], 0.0) + world.T_world_tote[:3, 3]
+    R = np.array([[math.cos(turn), -math.sin(turn), 0.0], [math.sin(turn), math.cos(turn), 0.0], [0.0, 0.0, 1.0]])
+    T_target = T_est.copy()
+    T_target[:3, :3] = R @ T_est[:3, :3]
+    T_target[:2, 3] = slot[:2] + R[:2, :2] @ (T_est[:2, 3] - centre)
+    T_target[2, 3] += world.table_top + TOTE_DROP - corners[:, 2].min()
+    return SeatOption(T_target @ T_part_tool, True, abs(math.degrees(turn)))
 
 
 def seat_options(cell: ArmCell, info, T_fix: np.ndarray, T_part_tool: np.ndarray, width: float,

@@ -99,7 +99,7 @@ def look_in_hand(cell: ArmCell, perception, part: str, q: np.ndarray, T_world_to
     wrist into its joint limit.
     """
     world = cell.world
-    model = perception.library.model(part)
+    model = perception.library.model(world.part_types[part])
     renderer = DepthRenderer(model.vertices, model.faces)
     T_camera_world = np.linalg.inv(world.T_world_camera)
     hypotheses = np.array(T_tool_parts)

@@ -15,6 +15,7 @@ import numpy as np
 from psorr.synthetic.catalog import symmetry_transforms
 from sim.skills.grasp_planning import angle_deg, upright_equivalent
 from sim.skills.in_hand import InHandLook
+from sim.skills.part_geometry import hull_points, lowest_point
 from sim.world import World
 
 MIN_LIFT = 0.05  # m the part must rise to count as grasped
@@ -121,12 +122,15 @@ def seating(world: World, part: str) -> Seating:
 
 
 def resting_on_table(world: World, T_world_part: np.ndarray, part: str) -> bool:
-    """Whether a pose of ``part`` could be resting on the table: one of its symmetric equivalents has
-    its origin (on its resting face) within ``REST_TOL`` of the table top and tilts at most
-    ``REST_TILT_DEG``, and its origin is over the table."""
+    """Whether a pose of ``part`` could be resting on the table, its origin over the table: upright (one of its
+    symmetric equivalents has its origin, on its resting face, within ``REST_TOL`` of the table top and tilts
+    at most ``REST_TILT_DEG``) or, in a world where parts rest any way, with its lowest point within
+    ``REST_TOL`` of the table top."""
     hx, hy = (v / 2 for v in world.config.table_size)
     if abs(T_world_part[0, 3]) > hx or abs(T_world_part[1, 3]) > hy:
         return False
+    if world.config.resting == "any":
+        return abs(lowest_point(world, T_world_part, part) - world.table_top) <= REST_TOL
     T = upright_equivalent(np.asarray(T_world_part, dtype=float), world.catalog[part])
     return abs(T[2, 3] - world.table_top) <= REST_TOL and T[2, 2] >= math.cos(math.radians(REST_TILT_DEG))
 
@@ -136,3 +140,52 @@ def not_resting_note(world: World, T_est: np.ndarray) -> str:
     tilt = math.degrees(math.acos(np.clip(T_est[2, 2], -1, 1)))
     return (f"estimate not resting upright on the table (z {T_est[2, 3] - world.table_top:+.3f} m above it, "
             f"tilted {tilt:.0f} deg): no pick planned")
+
+
+@dataclass(frozen=True)
+class ToteSeating:
+    """Where a released part ended in the tote (truth): ``inside`` (every corner of its hull within the tote's
+    walls), ``lowest_mm`` its lowest point over the table, ``speed_mm_s`` its speed, and ``slot_mm`` its
+    origin's distance from its slot in the table plane."""
+
+    inside: bool
+    lowest_mm: float
+    speed_mm_s: float
+    slot_mm: float
+
+    @property
+    def error_mm(self) -> float:
+        return self.slot_mm
+
+    @property
+    def yaw_deg(self) -> float:
+        """No yaw is asked of a part in the tote."""
+        return math.nan
+
+    @property
+    def placed(self) -> bool:
+        """Inside the tote, down on its floor (within REST_TOL_MM), and at rest (under 1 mm/s)."""
+        return bool(self.inside and abs(self.lowest_mm) <= REST_TOL_MM and self.speed_mm_s < 1.0)
+
+    def note(self) -> str:
+        verdict = "placed in the tote" if self.placed else "not placed in the tote"
+        return (f"{verdict}: {'inside' if self.inside else 'outside'} its walls, {self.slot_mm:.0f} mm from its "
+                f"slot, lowest point {self.lowest_mm:+.1f} mm over the table, moving {self.speed_mm_s:.1f} mm/s")
+
+
+def tote_seating(world: World, part: str) -> ToteSeating:
+    """Where ``part`` is now against the tote, read from ``world.data``."""
+    T = world.body_pose(part)
+    T_tote_world = np.linalg.inv(world.T_world_tote)
+    corners = hull_points(world, T, part) @ T_tote_world[:3, :3].T + T_tote_world[:3, 3]
+    slot = world.tote.slots[part]
+    adr = world.model.jnt_dofadr[world.model.joint(f"{part}_joint").id]
+    speed = float(np.linalg.norm(world.data.qvel[adr:adr + 3])) * 1e3
+    origin = T_tote_world[:2, :3] @ T[:3, 3] + T_tote_world[:2, 3]
+    return ToteSeating(world.tote.holds(corners[:, :2]), (corners[:, 2].min()) * 1e3, speed,
+                       float(np.linalg.norm(origin - slot)) * 1e3)
+
+
+def placement(world: World, part: str) -> Seating | ToteSeating:
+    """Where ``part`` is now against its place: its fixture, or the tote (read from ``world.data``)."""
+    return tote_seating(world, part) if world.places.get(part) == "tote" else seating(world, part)

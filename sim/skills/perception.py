@@ -93,8 +93,8 @@ class Perception:
         model = world.model
         base = model.body(world.arm.base_body).id
         self._arm_bodies = np.array([b for b in range(model.nbody) if _descends(model, b, base)])
-        self._fixture_bodies = np.array([model.body(f"{name}_fixture").id for name in world.T_world_fixtures],
-                                        dtype=np.int64)
+        places = [f"{name}_fixture" for name in world.T_world_fixtures] + (["tote"] if world.tote is not None else [])
+        self._fixture_bodies = np.array([model.body(name).id for name in places], dtype=np.int64)
         heights = [world.catalog[p].bounds()[1, 2] for p in world.workpieces]
         self.ceiling = world.table_top + max(heights) + CEILING_MARGIN
         self._monitor_rays = MONITOR_CAMERA.pixel_rays().reshape(-1, 3)
@@ -123,7 +123,7 @@ class Perception:
             cloud = self._workspace_cloud(frame, world_pts, valid, self.ceiling)
             detections = tuple(self._recognizer.recognize(cloud, self.rng).detections)
             for det in detections:
-                if det.model in self.world.workpieces:
+                if det.model in self.world.part_types.values():
                     estimates.setdefault(det.model, []).append(
                         Estimate(T @ det.T_cloud_model, det.score, tuple(T @ A for A in det.alternatives)))
         estimates = {k: tuple(sorted(v, key=lambda e: -e.score)) for k, v in estimates.items()}
@@ -224,11 +224,11 @@ _RECOGNIZERS: dict[tuple, object] = {}
 
 
 def _recognizer(world: World):
-    """A PSORR recognizer for every catalog part (trained once per process; cached on disk by psorr)."""
+    """A PSORR recognizer for every part in the world (trained once per process; cached on disk by psorr)."""
     from psorr.library.models import ModelLibrary
     from psorr.recognize import Recognizer
 
-    paths = tuple(str(world.catalog[n].mesh_path) for n in sorted(world.catalog))
+    paths = tuple(sorted({str(info.mesh_path) for info in world.catalog.values()}))  # one per part, not body
     if paths not in _RECOGNIZERS:
         _RECOGNIZERS[paths] = Recognizer(ModelLibrary.from_meshes(list(paths)))
     return _RECOGNIZERS[paths]

@@ -34,8 +34,10 @@ from sim.skills.grasp_planning import (
     upright_equivalent,
 )
 from sim.skills.in_hand import InHandLook, look_in_hand
-from sim.skills.judging import MIN_LIFT, PickResult, not_resting_note, pose_error, resting_on_table, seating
+from sim.skills.judging import MIN_LIFT, PickResult, not_resting_note, placement, pose_error, resting_on_table
 from sim.world import World
+
+TOTE_SETTLE_S = 0.5  # s a part set down in the tote is left before it is judged at rest
 
 
 @dataclass(frozen=True, eq=False)
@@ -167,13 +169,14 @@ def start_pick(world: World, part: str, T_world_part_estimate, cell: ArmCell | N
     """Check the request, and read the part's true pose and the estimate's error before anything moves."""
     if part not in world.workpieces:
         raise SimInputError(f"unknown part {part!r}; the world has {list(world.workpieces)}")
-    if part not in world.T_world_fixtures:
-        raise SimInputError(f"{part} has no fixture: build the world with fixtures=True")
+    if part not in world.T_world_fixtures and world.places.get(part) != "tote":
+        raise SimInputError(f"{part} has no place to go: build the world with fixtures=True")
     cell = ArmCell(world) if cell is None else cell
     info = world.catalog[part]
     T_est = upright_equivalent(np.asarray(T_world_part_estimate, float), info)
-    twins = tuple(upright_equivalent(np.asarray(T, float), info) for T in alternatives) if perception is not None \
-        else ()
+    # Which way round a part lies in the tote does not matter, so only a part for a fixture is looked at in the hand.
+    twins = tuple(upright_equivalent(np.asarray(T, float), info) for T in alternatives) \
+        if perception is not None and part in world.T_world_fixtures else ()
     body = world.model.body(part).id
     mujoco.mj_forward(world.model, world.data)
     T_start = world.body_pose(part)
@@ -267,8 +270,10 @@ def retreat(start: PickStart, released: Released) -> None:
 
 
 def judge(start: PickStart, plan: GraspPlan, lifted: Lifted, seat: Seat) -> PickResult:
-    """The result of a pick carried through: where the part ended against its fixture (truth)."""
-    seated = seating(start.world, start.part)
+    """The result of a pick carried through: where the part ended against its fixture or in the tote (truth)."""
+    if start.world.places.get(start.part) == "tote":
+        start.cell.hold(TOTE_SETTLE_S)
+    seated = placement(start.world, start.part)
     return start.result(plan.grasp.name, True, lifted.height, seated.placed, seated.error_mm, seated.yaw_deg,
                         seat.note + seated.note(), seat.in_hand)
 

@@ -2,10 +2,10 @@
 
 World frame: metres, z up, origin on the floor below the table's centre. The table top is at
 ``table_height``; the arm (``sim/world/robot.py``, attached with the prefix ``"arm/"``) stands on it
-``arm_inset`` from the -x edge and faces +x. Each workpiece is a free body named after its
-catalog part, whose body frame is the part's model frame (origin at the centre of the resting
-face, +z up): the catalog STL is its visual mesh, the CoACD parts from
-``assets/workpieces/collision`` its collision meshes. Each part has a fixture: a pocket of four
+``arm_inset`` from the -x edge and faces +x. Each workpiece is a free body named after its part,
+whose body frame is the part's model frame (origin at the centre of the resting face, +z up): its
+mesh is the visual mesh, its CoACD hulls (``assets/workpieces/collision`` for a catalog part,
+derived by :mod:`sim.parts` for a user's mesh) its collision meshes. Each part has a fixture: a pocket of four
 thin walls on the table, ``fixture_clearance`` wider than the part's footprint on every side; a
 part seated in it has the fixture's pose. A fixed camera (``"kinect"``, Kinect v1 intrinsics)
 looks at the table from the +x side. Keyframe ``"home"``: arm at home, parts settled.
@@ -20,36 +20,26 @@ poses the arm at time t. The home keyframe holds it at rest, out of the camera's
 
 from __future__ import annotations
 
-import hashlib
-import json
 import math
 from types import MappingProxyType
 
 import mujoco
 import numpy as np
 
-from psorr.synthetic.catalog import WorkpieceInfo, load_catalog
 from sim.devices.sensor import T_world_camera_opencv, fovy_deg
-from sim.errors import SimInputError, WorldBuildError
+from sim.errors import SimInputError
+from sim.parts.derive import CellPart
 from sim.people.occluder import RADII, ReachSchedule, occluder_pose, segment_half_lengths
-from sim.world.assets import COLLISION_DIR
 from sim.world.built import HOME_KEY, World, pose_matrix, quat_of
 from sim.world.config import WorldConfig
 from sim.world.layout import place_parts, yaw_matrix
+from sim.world.parts import cell_parts, drawn_rests, footprint_bounds, footprint_sides, instance_names, places
 from sim.world.robot import ArmConfig, apply_arm_options, load_arm_spec
+from sim.world.tote import ToteLayout
 
 CAMERA_NAME = "kinect"
 ARM_PREFIX = "arm/"
 _GEOM = mujoco.mjtGeom
-_REBUILD = "build them with: .venv/bin/python assets/workpieces/build_collision.py"
-
-
-def collision_index() -> dict:
-    """The CoACD index: part name -> {"files": [...], ...}; WorldBuildError if it was never built."""
-    path = COLLISION_DIR / "index.json"
-    if not path.is_file():
-        raise WorldBuildError(f"{path} is missing: the workpieces' collision parts are not built; {_REBUILD}")
-    return json.loads(path.read_text())["parts"]
 
 
 def _add_boxes(spec, body, name: str, boxes, material: str) -> None:
@@ -101,30 +91,38 @@ def _scene(spec: mujoco.MjSpec, cfg: WorldConfig) -> None:
     spec.worldbody.add_camera(name=CAMERA_NAME, pos=eye, quat=quat_of(R), fovy=fovy_deg(cfg.intrinsics))
 
 
-def _add_workpiece(spec, info: WorkpieceInfo, files: list[str], mesh, pos, quat) -> None:
-    """A free body for ``info``: visual STL, CoACD collision hulls, the catalog's mass and colour."""
-    name = info.name
-    spec.add_mesh(name=name, file=str(info.mesh_path))
-    spec.add_material(name=f"{name}_material", rgba=[*info.color, 1.0], specular=0.3)
-    body = spec.worldbody.add_body(name=name, pos=pos, quat=quat)
-    body.add_freejoint(name=f"{name}_joint")
+def _add_part_assets(spec, part: CellPart) -> None:
+    """The meshes and material every instance of ``part`` shares: visual mesh, collision hulls, colour."""
+    name = part.name
+    spec.add_mesh(name=name, file=str(part.info.mesh_path))
+    spec.add_material(name=f"{name}_material", rgba=[*part.info.color, 1.0], specular=0.3)
+    for k, file in enumerate(part.collision_files):
+        spec.add_mesh(name=f"{name}_collision_{k}", file=str(file))
+
+
+def _add_workpiece(spec, body_name: str, part: CellPart, mesh, pos, quat) -> None:
+    """A free body ``body_name`` of ``part``: its visual mesh, collision hulls, mass and inertia."""
+    info, name = part.info, part.name
+    body = spec.worldbody.add_body(name=body_name, pos=pos, quat=quat)
+    body.add_freejoint(name=f"{body_name}_joint")
     body.explicitinertial = True
     body.mass = info.mass
     body.ipos = mesh.center_mass
     I = mesh.moment_inertia * (info.mass / mesh.mass)  # noqa: E741 - about the centre of mass, model axes
     body.fullinertia = [I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2]]
-    body.add_geom(default=spec.find_default("visual"), name=f"{name}_visual", type=_GEOM.mjGEOM_MESH, meshname=name,
-                  material=f"{name}_material")
-    for k, file in enumerate(files):
-        spec.add_mesh(name=f"{name}_collision_{k}", file=str(COLLISION_DIR / file))
-        body.add_geom(default=spec.find_default("collision"), name=f"{name}_collision_{k}", type=_GEOM.mjGEOM_MESH,
-                      meshname=f"{name}_collision_{k}")
+    body.add_geom(default=spec.find_default("visual"), name=f"{body_name}_visual", type=_GEOM.mjGEOM_MESH,
+                  meshname=name, material=f"{name}_material")
+    for k in range(len(part.collision_files)):
+        body.add_geom(default=spec.find_default("collision"), name=f"{body_name}_collision_{k}",
+                      type=_GEOM.mjGEOM_MESH, meshname=f"{name}_collision_{k}")
 
 
-def _fixture_walls(bounds, cfg: WorldConfig):
-    """(centre, half size) of the 4 walls of a pocket around ``bounds``, in the fixture (= seated part) frame."""
-    (x0, y0), (x1, y1) = bounds[0] - cfg.fixture_clearance, bounds[1] + cfg.fixture_clearance
-    (t, h), cx, cy = cfg.fixture_wall, (x0 + x1) / 2, (y0 + y1) / 2
+def _fixture_walls(bounds, cfg: WorldConfig, clearance: float | None = None, wall=None):
+    """(centre, half size) of the 4 walls of a pocket around ``bounds``, in the fixture (= seated part) frame
+    (``clearance`` and ``wall``: the fixtures' unless given)."""
+    clearance = cfg.fixture_clearance if clearance is None else clearance
+    (x0, y0), (x1, y1) = bounds[0] - clearance, bounds[1] + clearance
+    (t, h), cx, cy = cfg.fixture_wall if wall is None else wall, (x0 + x1) / 2, (y0 + y1) / 2
     ends = [([x, cy, h / 2], [t / 2, (y1 - y0) / 2 + t, h / 2]) for x in (x0 - t / 2, x1 + t / 2)]
     return ends + [([cx, y, h / 2], [(x1 - x0) / 2, t / 2, h / 2]) for y in (y0 - t / 2, y1 + t / 2)]
 
@@ -153,17 +151,14 @@ def build_world(config: WorldConfig = WorldConfig(), rng: np.random.Generator | 
     Raises:
         SimInputError: an unknown workpiece name or no rng.
         WorldBuildError: the collision parts are missing or stale, or the parts do not fit.
+        PartMeshError: a mesh part's mesh cannot become a part.
     """
     if not isinstance(rng, np.random.Generator):
         raise SimInputError("build_world needs rng, a numpy.random.Generator (e.g. np.random.default_rng(0))")
-    cfg, catalog, index = config, load_catalog(), collision_index()
-    unknown = [n for n in cfg.workpieces if n not in catalog]
-    if unknown:
-        raise SimInputError(f"unknown workpieces {unknown}; choose from {sorted(catalog)}")
-    for name in cfg.workpieces:
-        digest = hashlib.sha256(catalog[name].mesh_path.read_bytes()).hexdigest()
-        if index.get(name, {}).get("source_sha256") != digest:
-            raise WorldBuildError(f"the collision parts of {name} are missing or older than its mesh; {_REBUILD}")
+    cfg = config
+    parts = cell_parts(cfg)
+    types = instance_names(cfg)  # body -> part
+    bodies = tuple(types)
 
     spec = mujoco.MjSpec()
     _scene(spec, cfg)
@@ -172,30 +167,47 @@ def build_world(config: WorldConfig = WorldConfig(), rng: np.random.Generator | 
     arm = ArmConfig().with_prefix(ARM_PREFIX)
     bare = spec.compile()  # table, arm and camera only: to see where the camera sees the table
 
-    meshes = {n: catalog[n].load_mesh() for n in cfg.workpieces}
-    bounds = {n: meshes[n].bounds[:, :2] for n in cfg.workpieces}
-    items = [(n, bounds[n], cfg.gap / 2) for n in cfg.workpieces]
-    if cfg.fixtures:
-        pad = cfg.fixture_clearance + cfg.fixture_wall[0] + cfg.gap / 2
-        items += [(f"{n}_fixture", bounds[n], pad) for n in cfg.workpieces]
+    meshes = {n: parts[n].info.load_mesh() for n in cfg.workpieces}
+    where = places(cfg) if cfg.fixtures else {}
+    rests = drawn_rests(cfg, types, meshes, rng)
+    bounds = {b: footprint_bounds(meshes[t], rests.get(b)) for b, t in types.items()}
+    items = [(b, bounds[b], cfg.gap / 2) for b in bodies]
+    pad = cfg.fixture_clearance + cfg.fixture_wall[0] + cfg.gap / 2
+    items += [(f"{b}_fixture", bounds[b], pad) for b in bodies if where.get(b) == "fixture"]
+    tote = ToteLayout.for_parts({b: footprint_sides(meshes[types[b]], rests.get(b)) for b in bodies
+                                 if where.get(b) == "tote"}) if "tote" in where.values() else None
+    if tote is not None:
+        items.append(("tote", tote.bounds(), cfg.tote_wall[0] + cfg.gap / 2))
     spots = place_parts(cfg, items, base[:2], bare, arm.home_key, CAMERA_NAME, rng)
     fixtures = {}
-    for name in cfg.workpieces if cfg.fixtures else ():
+    for name in bodies:
+        if where.get(name) != "fixture":
+            continue
         x, y, yaw = spots[f"{name}_fixture"]
         R = yaw_matrix(yaw)
         fixtures[name] = pose_matrix([x, y, cfg.table_height], R)
         body = spec.worldbody.add_body(name=f"{name}_fixture", pos=[x, y, cfg.table_height], quat=quat_of(R))
         _add_boxes(spec, body, f"{name}_fixture", _fixture_walls(bounds[name], cfg), "fixture")
-    for name in cfg.workpieces:
+    T_world_tote = None
+    if tote is not None:
+        x, y, yaw = spots["tote"]
+        T_world_tote = pose_matrix([x, y, cfg.table_height], yaw_matrix(yaw))
+        body = spec.worldbody.add_body(name="tote", pos=T_world_tote[:3, 3], quat=quat_of(T_world_tote[:3, :3]))
+        _add_boxes(spec, body, "tote", _fixture_walls(tote.bounds(), cfg, 0.0, cfg.tote_wall), "fixture")
+    for part in parts.values():
+        _add_part_assets(spec, part)
+    for name in bodies:
         x, y, yaw = spots[name]
-        pos = [x, y, cfg.table_height + cfg.drop_height]
-        _add_workpiece(spec, catalog[name], index[name]["files"], meshes[name], pos, quat_of(yaw_matrix(yaw)))
+        T = pose_matrix([x, y, cfg.table_height + cfg.drop_height], yaw_matrix(yaw))
+        if name in rests:
+            T = T @ rests[name]
+        _add_workpiece(spec, name, parts[types[name]], meshes[types[name]], T[:3, 3], quat_of(T[:3, :3]))
     schedule, occluder_geoms = None, ()
     if cfg.occluder:  # drawn last: the layout above does not depend on it
         data = mujoco.MjData(bare)
         mujoco.mj_forward(bare, data)
         eye = T_world_camera_opencv(bare, data, CAMERA_NAME)[:3, 3]
-        targets = [spots[n][:2] for n in cfg.workpieces]
+        targets = [spots[n][:2] for n in bodies]
         schedule = ReachSchedule.sample(rng, cfg.table_size, cfg.table_height, targets=targets, eye=eye)
         occluder_geoms = _add_occluder(spec, schedule)
 
@@ -207,7 +219,7 @@ def build_world(config: WorldConfig = WorldConfig(), rng: np.random.Generator | 
     for _ in range(round(cfg.settle_time / model.opt.timestep)):
         mujoco.mj_step(model, data)
     home_qpos = key.qpos.copy()
-    for name in cfg.workpieces:
+    for name in bodies:
         adr = model.joint(f"{name}_joint").qposadr[0]
         home_qpos[adr:adr + 7] = data.qpos[adr:adr + 7]
         spec.body(name).pos = data.qpos[adr:adr + 3]
@@ -223,14 +235,17 @@ def build_world(config: WorldConfig = WorldConfig(), rng: np.random.Generator | 
         T.setflags(write=False)
         return T
 
-    bodies = {n: model.body(n).id for n in cfg.workpieces}
+    ids = {n: model.body(n).id for n in bodies}
     return World(
-        config=cfg, spec=spec, model=model, data=data, arm=arm, workpieces=cfg.workpieces,
-        catalog=MappingProxyType({n: catalog[n] for n in cfg.workpieces}),
+        config=cfg, spec=spec, model=model, data=data, arm=arm, workpieces=bodies,
+        part_types=MappingProxyType(types),
+        catalog=MappingProxyType({b: parts[t].info for b, t in types.items()}),
+        grasps=MappingProxyType({b: parts[t].grasps for b, t in types.items()}),
         T_world_workpieces=MappingProxyType(
-            {n: frozen(pose_matrix(data.xpos[i], data.xmat[i].reshape(3, 3))) for n, i in bodies.items()}
+            {n: frozen(pose_matrix(data.xpos[i], data.xmat[i].reshape(3, 3))) for n, i in ids.items()}
         ),
         T_world_fixtures=MappingProxyType({n: frozen(T) for n, T in fixtures.items()}),
+        places=MappingProxyType(where), tote=tote, T_world_tote=None if tote is None else frozen(T_world_tote),
         T_world_camera=frozen(T_world_camera_opencv(model, data, CAMERA_NAME)),
         camera_name=CAMERA_NAME, table_top=cfg.table_height, T_world_arm_base=frozen(pose_matrix(base, np.eye(3))),
         occluder=schedule, occluder_geoms=occluder_geoms,

@@ -4,7 +4,7 @@ occluder at a time). The scene itself is assembled only in ``sim.world.assembly`
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from types import MappingProxyType
 
 import mujoco
@@ -14,6 +14,7 @@ from sim.errors import SimInputError
 from sim.people.occluder import ReachSchedule, occluder_pose
 from sim.world.config import WorldConfig
 from sim.world.robot import ArmConfig
+from sim.world.tote import ToteLayout
 
 HOME_KEY = "home"
 
@@ -31,10 +32,17 @@ class World:
         spec: the MjSpec it was compiled from (edit and ``spec.compile()`` for variants).
         model, data: the compiled model and a data at the ``"home"`` keyframe, forwarded.
         arm: the arm's names in this model (prefixed ``"arm/"``).
-        workpieces: body names of the workpieces (= their catalog names), in config order.
-        catalog: catalog entry of each workpiece.
+        workpieces: body names of the workpieces, in config order: a part's name, or ``<name>_<k>`` for the
+            k-th of several instances (:func:`sim.world.parts.instance_names`).
+        part_types: body name -> its part's name (the recognizer's model name).
+        catalog: per body, its part's mesh, mass, colour and symmetries (a catalog entry, or one derived from a
+            user's mesh).
+        grasps: per body, its part's parallel-jaw grasps, best first (the catalog's, or synthesised).
         T_world_workpieces: settled pose of each workpiece's body (= model frame) at home.
-        T_world_fixtures: per workpiece, the pose its model frame has when seated in its fixture.
+        T_world_fixtures: per body placed in a fixture, the pose its model frame has when seated there.
+        places: body -> ``"fixture"`` or ``"tote"``, where it is to be placed (empty without fixtures).
+        tote: the tote's :class:`~sim.world.tote.ToteLayout` (its inside and slots), None without a tote.
+        T_world_tote: the tote's pose (its inside's centre, on the table), None without a tote.
         T_world_camera: the camera's pose with OpenCV axes (x right, y down, z forward).
         camera_name: the camera to render (``sim.devices.sensor.DepthCamera(model, camera_name)``).
         table_top: z of the table top.
@@ -50,7 +58,9 @@ class World:
     data: mujoco.MjData
     arm: ArmConfig
     workpieces: tuple[str, ...]
+    part_types: MappingProxyType
     catalog: MappingProxyType
+    grasps: MappingProxyType
     T_world_workpieces: MappingProxyType
     T_world_fixtures: MappingProxyType
     T_world_camera: np.ndarray
@@ -59,6 +69,9 @@ class World:
     T_world_arm_base: np.ndarray
     occluder: ReachSchedule | None = None
     occluder_geoms: tuple[str, ...] = ()
+    places: MappingProxyType = field(default_factory=lambda: MappingProxyType({}))
+    tote: ToteLayout | None = None
+    T_world_tote: np.ndarray | None = None
 
     def reset(self, data: mujoco.MjData | None = None) -> mujoco.MjData:
         """Put ``data`` (default: ``self.data``) at the home keyframe and forward it; return it."""
@@ -66,6 +79,10 @@ class World:
         mujoco.mj_resetDataKeyframe(self.model, data, self.model.key(HOME_KEY).id)
         mujoco.mj_forward(self.model, data)
         return data
+
+    def bodies_of(self, part: str) -> tuple[str, ...]:
+        """The bodies of the part ``part`` (its instances), in config order; empty for a part not in the world."""
+        return tuple(body for body, kind in self.part_types.items() if kind == part)
 
     def body_pose(self, name: str, data: mujoco.MjData | None = None) -> np.ndarray:
         """Pose (4, 4) of body ``name`` in ``data`` (default ``self.data``; kinematics must be current)."""

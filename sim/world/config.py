@@ -8,6 +8,9 @@ from dataclasses import dataclass
 from psorr.sensing.camera import CameraIntrinsics
 from sim.devices.sensor import KINECT_V1_CAMERA, check_intrinsics
 from sim.errors import SimInputError
+from sim.parts.source import MeshPart
+
+RESTING = ("upright", "any")
 
 
 @dataclass(frozen=True)
@@ -15,7 +18,10 @@ class WorldConfig:
     """What to build (metres, degrees, seconds).
 
     Attributes:
-        workpieces: catalog part names to place, each once (``psorr.synthetic.catalog.load_catalog()``).
+        workpieces: names of the parts to place, each once: catalog parts
+            (``psorr.synthetic.catalog.load_catalog()``) and the names of ``mesh_parts``.
+        mesh_parts: parts made from the user's own meshes (:class:`sim.parts.source.MeshPart`), each named
+            in ``workpieces``; everything else they need is derived from the mesh (:mod:`sim.parts`).
         table_size: (x, y) of the table top; the arm stands at the -x edge.
         table_height: height of the table top above the floor.
         arm_inset: distance of the arm's base axis from the table's -x edge.
@@ -23,7 +29,11 @@ class WorldConfig:
         camera_tilt_deg: angle of the optical axis from straight down, in [0, 45]; the camera
             stands on the +x side and leans towards the arm.
         camera_target: (x, y) of the table-top point on the optical axis.
-        fixtures: add one fixture per workpiece.
+        fixtures: add a place for every workpiece: a fixture for a part resting upright, the tote otherwise.
+        resting: ``"upright"``: each part on its largest stable face (its model frame's rest); ``"any"``: each
+            in one of its stable rests, drawn by probability (``psorr.synthetic.resting.stable_rests``). A
+            part not resting upright is placed in the tote.
+        tote_wall: (thickness, height) of the tote's walls; its inside is sized for the parts it takes.
         fixture_clearance: gap between a part's footprint and its fixture's walls, per side.
         fixture_wall: (thickness, height) of the fixture walls.
         reach: (min, max) horizontal distance from the arm's base axis to anything placed.
@@ -35,6 +45,7 @@ class WorldConfig:
     """
 
     workpieces: tuple[str, ...] = ("u_channel", "chassis", "transformer", "flanged_hub")
+    mesh_parts: tuple[MeshPart, ...] = ()
     table_size: tuple[float, float] = (0.9, 1.0)
     table_height: float = 0.75
     arm_inset: float = 0.1
@@ -42,6 +53,8 @@ class WorldConfig:
     camera_tilt_deg: float = 30.0
     camera_target: tuple[float, float] = (0.0, 0.0)
     fixtures: bool = True
+    resting: str = "upright"
+    tote_wall: tuple[float, float] = (0.006, 0.03)
     fixture_clearance: float = 0.004
     fixture_wall: tuple[float, float] = (0.006, 0.012)
     reach: tuple[float, float] = (0.25, 0.7)
@@ -53,14 +66,24 @@ class WorldConfig:
 
     def __post_init__(self):
         object.__setattr__(self, "workpieces", tuple(self.workpieces))
+        object.__setattr__(self, "mesh_parts", tuple(self.mesh_parts))
         if not self.workpieces or len(set(self.workpieces)) != len(self.workpieces):
             raise SimInputError(f"workpieces must name at least one part, each once; got {self.workpieces}")
+        unnamed = [getattr(p, "name", p) for p in self.mesh_parts
+                   if not isinstance(p, MeshPart) or p.name not in self.workpieces]
+        if unnamed or len({p.name for p in self.mesh_parts}) != len(self.mesh_parts):
+            raise SimInputError(f"each of mesh_parts must be a MeshPart named once in workpieces; {unnamed} are not")
+        if self.resting not in RESTING:
+            raise SimInputError(f"resting must be one of {', '.join(RESTING)}, got {self.resting!r}")
+        if self.resting == "any" and any(p.place == "fixture" for p in self.mesh_parts):
+            raise SimInputError("a part resting any way cannot go to a fixture, which holds it upright: give it "
+                                "place: tote, or resting: upright")
         if not 0.6 <= self.camera_height <= 1.0:
             raise SimInputError(f"camera_height must lie in [0.6, 1.0] m, got {self.camera_height}")
         if not 0.0 <= self.camera_tilt_deg <= 45.0:
             raise SimInputError(f"camera_tilt_deg must lie in [0, 45], got {self.camera_tilt_deg}")
-        if min(*self.table_size, self.table_height, *self.fixture_wall, self.fixture_clearance) <= 0:
-            raise SimInputError("table_size, table_height, fixture_wall and fixture_clearance must be > 0")
+        if min(*self.table_size, self.table_height, *self.fixture_wall, self.fixture_clearance, *self.tote_wall) <= 0:
+            raise SimInputError("table_size, table_height, fixture_wall, fixture_clearance and tote_wall must be > 0")
         if not 0 <= self.reach[0] < self.reach[1] or min(self.gap, self.drop_height, self.settle_time) < 0:
             raise SimInputError("reach must be (min, max) with 0 <= min < max; gap, drop_height, settle_time >= 0")
         check_intrinsics(self.intrinsics)

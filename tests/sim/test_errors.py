@@ -39,6 +39,6 @@ def test_bad_input_is_still_psorrs_invalid_input_and_a_value_error():
 def test_a_bad_task_file_is_a_sim_error_naming_the_file(tmp_path):
     task = tmp_path / "task.yaml"
     task.write_text("workpieces: [gear]\n")
-    with pytest.raises(TaskFileError, match=r"task\.yaml: unknown workpieces \['gear'\].*choose from") as info:
+    with pytest.raises(TaskFileError, match=r"task\.yaml: line 1: unknown workpiece 'gear' \(name catalog") as info:
         load_task(task)
     assert isinstance(info.value, SimError) and info.value.path == str(task)

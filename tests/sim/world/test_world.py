@@ -15,8 +15,8 @@ from psorr.synthetic.catalog import load_catalog
 from sim.devices.render_backend import ensure_headless_gl
 from sim.devices.sensor import DepthCamera, T_world_camera_opencv
 from sim.world import HOME_KEY, WorldConfig, build_world
-from sim.world.assembly import collision_index
 from sim.world.assets import COLLISION_DIR
+from sim.world.parts import collision_index
 
 SEED = 7
 CONFIG = WorldConfig(workpieces=("u_channel", "chassis", "transformer", "pipe_tee", "bushing"))

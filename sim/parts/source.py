@@ -1,0 +1,76 @@
+"""A user's mesh as a task file names it: :class:`MeshPart`, checked before anything is built."""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from sim.errors import SimInputError
+
+UNITS = {"m": 1.0, "mm": 1e-3}
+PLACES = ("fixture", "tote")
+DEFAULT_DENSITY = 1240.0
+"""kg/m^3 of a part that gives none: printed PLA, the material of most parts users bring from a printer."""
+_NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_.-]*$")
+
+
+@dataclass(frozen=True)
+class MeshPart:
+    """A part the cell takes from a mesh file rather than from the catalog.
+
+    Attributes:
+        path: the mesh file (STL, OBJ or PLY), absolute.
+        units: the file's length unit, ``"m"`` or ``"mm"``.
+        name: the part's name in the cell and in the recognizer's library (default: the file's stem).
+        count: how many of it go on the table.
+        color: (3,) display RGB in [0, 1], or None for a grey chosen from the name.
+        density: kg/m^3, for the mass and inertia.
+        place: ``"fixture"``, ``"tote"``, or None for the task's default (a fixture for a part resting upright).
+    """
+
+    path: Path
+    units: str = "m"
+    name: str = ""
+    count: int = 1
+    color: tuple[float, float, float] | None = None
+    density: float = DEFAULT_DENSITY
+    place: str | None = None
+
+    def __post_init__(self):
+        object.__setattr__(self, "path", Path(self.path))
+        if not self.name:
+            object.__setattr__(self, "name", self.path.stem)
+        if self.units not in UNITS:
+            raise SimInputError(f"units must be one of {', '.join(UNITS)}, got {self.units!r}")
+        if not _NAME.match(self.name):
+            raise SimInputError(f"name must start with a letter and hold only letters, digits, '_', '.' or '-' "
+                                f"(it names bodies and files), got {self.name!r}")
+        if isinstance(self.count, bool) or not isinstance(self.count, int) or self.count < 1:
+            raise SimInputError(f"count must be a whole number of at least 1, got {self.count!r}")
+        if self.color is not None:
+            object.__setattr__(self, "color", _rgb(self.color))
+        if isinstance(self.density, bool) or not isinstance(self.density, (int, float)) \
+                or not math.isfinite(self.density) or self.density <= 0:
+            raise SimInputError(f"density must be a positive number of kg/m^3, got {self.density!r}")
+        if self.place is not None and self.place not in PLACES:
+            raise SimInputError(f"place must be one of {', '.join(PLACES)}, got {self.place!r}")
+
+    @property
+    def scale(self) -> float:
+        """Metres per unit of the file."""
+        return UNITS[self.units]
+
+
+def _rgb(value) -> tuple[float, float, float]:
+    try:
+        rgb = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        rgb = np.full(1, np.nan)
+    if isinstance(value, (str, bytes)) or rgb.shape != (3,) or not np.isfinite(rgb).all() \
+            or rgb.min() < 0 or rgb.max() > 1:
+        raise SimInputError(f"color must be 3 numbers in [0, 1] (red, green, blue), got {value!r}")
+    return tuple(float(c) for c in rgb)
