@@ -5,10 +5,15 @@ episode: with the true poses (oracle) and with PSORR's poses from the Kinect (re
 person reaches over the table in both (``--occluder off`` to remove them), so the gap between
 the modes is what recognition costs. Success is judged on the simulator's truth (sim/skills/pick.py).
 
-Targets (issue 4): recognized grasp success >= 95% and within 3 points of oracle; place
-success >= 90%; under 20 s of wall time per episode on one core.
+Targets, for tasks/demo.yaml (issue 4): recognized grasp success >= 95% and within 3 points of
+oracle; place success >= 90%; under 20 s of wall time per episode on one core. For any other task
+(issue 33: users' meshes, several instances, any rest, parts touching): grasp success >= 90% and
+within 5 points of oracle, place success >= 85%, at most 3 s of wall time per pick with its look.
+A table gives the reason each failed pick failed (benchmarks/episode_failures.py).
 
     python benchmarks/episodes.py [--episodes 50] [--seed 0] [--task tasks/demo.yaml] [--occluder on|off]
+
+writes results/episodes.{md,json,png} for the demo task and results/episodes_<task>.* for another.
 """
 
 from __future__ import annotations
@@ -23,6 +28,7 @@ from pathlib import Path
 
 import _single_core  # noqa: F401  (must precede numpy)
 import numpy as np
+from episode_failures import failure_counts, failure_table
 from tqdm import tqdm
 
 from psorr.errors import PsorrError
@@ -35,6 +41,7 @@ from sim.world.tasks import load_task
 ROOT = Path(__file__).resolve().parents[1]
 MODES = (PoseSource.ORACLE, PoseSource.RECOGNIZED)
 TARGETS = {"grasp": 0.95, "gap_points": 3.0, "place": 0.90, "wall_s": 20.0}
+ANY_PART_TARGETS = {"grasp": 0.90, "gap_points": 5.0, "place": 0.85, "wall_s_per_pick": 3.0}
 
 
 def _row(mode: str, results) -> dict:
@@ -87,6 +94,28 @@ def _plot(path: Path, per_part: dict, rows: list[dict]) -> None:
     plt.close(fig)
 
 
+def _checks(task: str, oracle: dict, rec: dict, rows: list[dict], results: dict) -> list[tuple[str, bool]]:
+    """(target, met) of the demo task's targets, or of the any-part targets for another task."""
+    gap = 100 * (oracle["grasp_success_rate"] - rec["grasp_success_rate"])
+    if task == "demo":
+        return [
+            ("recognized grasp success >= 95%", rec["grasp_success_rate"] >= TARGETS["grasp"]),
+            (f"within 3 points of oracle (gap {gap:.1f})", gap <= TARGETS["gap_points"]),
+            ("recognized place success >= 90%", rec["place_success_rate"] >= TARGETS["place"]),
+            ("under 20 s per episode", max(r["wall_s_per_episode"] for r in rows) < TARGETS["wall_s"]),
+        ]
+    t = ANY_PART_TARGETS
+    per_pick = sum(r.wall_s for r in results["recognized"]) / max(rec["picks"], 1)
+    blind = sum(p.grasp_name != "" and not np.isfinite(p.pose_error_mm) for r in results["recognized"] for p in r.picks)
+    return [
+        ("recognized grasp success >= 90%", rec["grasp_success_rate"] >= t["grasp"]),
+        (f"within 5 points of oracle (gap {gap:.1f})", gap <= t["gap_points"]),
+        ("recognized place success >= 85%", rec["place_success_rate"] >= t["place"]),
+        (f"at most 3 s per pick with its look ({per_pick:.1f} s)", per_pick <= t["wall_s_per_pick"]),
+        (f"no pick from a pose the look did not return ({blind})", blind == 0),
+    ]
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--episodes", type=int, default=50)
@@ -131,13 +160,8 @@ def main(argv=None) -> int:
             n, g, p = per_part[m].get(part, (0, 0, 0))
             cells += [f"{g}/{n}", f"{p}/{n}"]
         lines.append(f"| {part} | " + " | ".join(cells) + " |")
-    gap = 100 * (oracle["grasp_success_rate"] - rec["grasp_success_rate"])
-    checks = [
-        ("recognized grasp success >= 95%", rec["grasp_success_rate"] >= TARGETS["grasp"]),
-        (f"within 3 points of oracle (gap {gap:.1f})", gap <= TARGETS["gap_points"]),
-        ("recognized place success >= 90%", rec["place_success_rate"] >= TARGETS["place"]),
-        ("under 20 s per episode", max(r["wall_s_per_episode"] for r in rows) < TARGETS["wall_s"]),
-    ]
+    lines += ["", "Failed picks by reason:", ""] + failure_table(results)
+    checks = _checks(Path(args.task).stem, oracle, rec, rows, results)
     seen = [p.in_hand for r in results["recognized"] for p in r.picks if p.in_hand is not None]
     lines += ["", f"Looks in the hand (recognized; a pose whose near-symmetric twin the look left open): {len(seen)}; "
                   f"held the other way round: {sum(s.chosen > 0 for s in seen)}; "
@@ -145,16 +169,18 @@ def main(argv=None) -> int:
     lines += ["", "Targets: " + "; ".join(f"{what}: {'met' if ok else 'MISSED'}" for what, ok in checks)]
     print("\n".join(lines))
 
+    stem = "episodes" if Path(args.task).stem == "demo" else f"episodes_{Path(args.task).stem}"
     args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "episodes.md").write_text("\n".join(lines) + "\n")
-    notes = {m: [{"episode": i, "part": p.part, "grasped": p.grasped, "placed": p.placed,
+    (args.out / f"{stem}.md").write_text("\n".join(lines) + "\n")
+    notes = {m: [{"episode": i, "part": p.part, "grasp": p.grasp_name, "grasped": p.grasped, "placed": p.placed,
                   "pose_error_mm": p.pose_error_mm, "rot_error_deg": p.rot_error_deg, "looks": p.looks, "note": p.note,
                   "in_hand": None if p.in_hand is None else asdict(p.in_hand)}
                  for i, r in enumerate(results[m]) for p in r.picks] for m in MODES}
-    (args.out / "episodes.json").write_text(json.dumps({"rows": rows, "per_part": per_part, "picks": notes},
-                                                       indent=1, default=float))
-    _plot(args.out / "episodes.png", per_part, rows)
-    print(f"wrote {args.out / 'episodes.md'}, .json and .png", file=sys.stderr)
+    failures = {m: failure_counts(results[m]) for m in MODES}
+    (args.out / f"{stem}.json").write_text(json.dumps({"task": Path(args.task).name, "rows": rows, "per_part": per_part,
+                                                       "failures": failures, "picks": notes}, indent=1, default=float))
+    _plot(args.out / f"{stem}.png", per_part, rows)
+    print(f"wrote {args.out / stem}.md, .json and .png", file=sys.stderr)
     return 0
 
 
