@@ -75,7 +75,7 @@ def decompose(mesh: trimesh.Trimesh, settings: dict, log_level: str = "error") -
 
 def write_hulls(mesh_path: Path, out_dir: Path, settings: dict, max_rounds: int) -> dict:
     """Decompose the STL at ``mesh_path`` (metres) into ``out_dir/hull_<k>.stl``, stopping the process with
-    STALLED if CoACD starts round ``max_rounds``; return the run's summary (see the module's docstring)."""
+    STALLED if CoACD needs more than ``max_rounds`` rounds; return the run's summary (see the module's docstring)."""
     mesh = load_mesh(mesh_path)
     start = time.perf_counter()
     with _RoundWatch(max_rounds) as watch:

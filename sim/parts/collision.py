@@ -52,7 +52,8 @@ class CollisionParams:
         max_rounds: CoACD cuts every piece still too concave once a round; a search needing more rounds is
             slicing one piece ever thinner (narrow gaps do that) and is stopped, and the part remeshed.
         seed: CoACD's seed; equal settings give equal hulls.
-        timeout_s: s, the longest a part's decomposition may take, remeshing included.
+        timeout_s: s, the longest a part's decomposition may take, remeshing included (the slowest of 53
+            parts measured took 130 s on one busy core).
     """
 
     concavity: float = 0.005
