@@ -27,9 +27,9 @@ def grasp_tolerance() -> str:
 
 # ---- episodes (benchmarks/episodes.py) -------------------------------------------------------------------------
 
-def episodes() -> str:
+def episodes(stem: str = "episodes") -> str:
     rows = []
-    for r in load("episodes")["rows"]:
+    for r in load(stem)["rows"]:
         error = "0" if r["mode"] == "oracle" else \
             f"{r['pose_error_mm_median']:.1f} mm, {r['rot_error_deg_median']:.1f} deg"
         rows.append([r["mode"], r["episodes"], r["picks"], f"{r['grasp_success_rate']:.0%}",
@@ -42,8 +42,8 @@ def episodes() -> str:
                   "protective stops", "closest the arm came to the person"], rows, "lrrrrrrrrrr")
 
 
-def episodes_per_part() -> str:
-    per_part = load("episodes")["per_part"]
+def episodes_per_part(stem: str = "episodes") -> str:
+    per_part = load(stem)["per_part"]
     parts = sorted({p for counts in per_part.values() for p in counts})
     rows = []
     for part in parts:
@@ -63,3 +63,18 @@ def episodes_in_hand() -> str:
              "yes" if p["in_hand"]["chosen"] else "no", "yes" if p["placed"] else "no"] for p in looks]
     return table(["episode", "part", "wrist yaw deg", "telling pixels", "score", "look", "held the other way round",
                   "placed"], rows, "rlrrrlll")
+
+
+def episodes_failures(stem: str) -> str:
+    """Per mode, the failed picks by reason (benchmarks/episode_failures.py)."""
+    failures = load(stem)["failures"]
+    reasons = list(next(iter(failures.values())))
+    rows = [[mode, sum(counts.values()), *(counts[r] for r in reasons)] for mode, counts in failures.items()]
+    return table(["poses", "failed picks", *reasons], rows, "l" + "r" * (len(reasons) + 1))
+
+
+def task_tables(task: str) -> dict:
+    """The placeholders of one task's episode tables: ``episodes-<task>``, ``-per-part`` and ``-failures``."""
+    stem, name = f"episodes_{task}", f"episodes-{task.replace('_', '-')}"
+    return {name: lambda: episodes(stem), f"{name}-per-part": lambda: episodes_per_part(stem),
+            f"{name}-failures": lambda: episodes_failures(stem)}
