@@ -165,7 +165,7 @@ class Episode:
         world, at = self.world, T_world_part[:3, 3]
         if world.tote is not None:
             inside = np.linalg.inv(world.T_world_tote)[:2] @ np.append(at, 1.0)
-            if np.all(np.abs(inside) <= world.tote.half_inside + world.config.tote_wall[0]):
+            if world.tote.holds(inside[None], margin=world.config.tote_wall[0]):
                 return True
         filled = [world.T_world_fixtures[p.part][:3, 3] for p in self.picks
                   if p.grasped and p.part in world.T_world_fixtures]

@@ -142,7 +142,7 @@ def place_footprints(rng: np.random.Generator, footprints: list[np.ndarray], hal
     places of a footprint, and a layout in which one finds no room starts again, up to ``attempts``
     times. Raises InvalidInputError when none succeeds.
     """
-    order = sorted(range(len(footprints)), key=lambda k: -_area(footprints[k]))
+    order = sorted(range(len(footprints)), key=lambda k: -polygon_area(footprints[k]))
     for _ in range(attempts):
         placed = _try_layout(rng, [footprints[k] for k in order], half_extents, gap, tries)
         if placed is not None:
@@ -152,6 +152,7 @@ def place_footprints(rng: np.random.Generator, footprints: list[np.ndarray], hal
                             "larger patch (SceneParams.patch_half_extents)")
 
 
-def _area(polygon: np.ndarray) -> float:
+def polygon_area(polygon: np.ndarray) -> float:
+    """Area of the simple polygon (K, 2) (the shoelace formula), in its unit squared."""
     x, y = polygon[:, 0], polygon[:, 1]
     return 0.5 * abs(float(x @ np.roll(y, -1) - y @ np.roll(x, -1)))

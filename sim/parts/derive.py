@@ -113,9 +113,9 @@ def _squared_up(outline: np.ndarray) -> np.ndarray:
 
 def _check_size(part: MeshPart, outline: np.ndarray) -> None:
     from psorr.hypotheses.outline import OutlineParams
+    from psorr.synthetic.resting import polygon_area
 
-    x, y = outline.T
-    footprint = 0.5 * abs(float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))))
+    footprint = polygon_area(outline)
     least = OutlineParams().min_area
     if footprint < least:
         raise PartMeshError(part.path, f"is too small for the sensor: resting, it covers {footprint * 1e4:.2f} cm^2 "

@@ -25,11 +25,10 @@ from pathlib import Path
 
 from sim.errors import SimInputError, TaskFileError
 from sim.parts.source import MeshPart
-from sim.world.config import WorldConfig
+from sim.world.config import RESTING, WorldConfig
 
 TASK_KEYS = ("workpieces", "camera_height", "camera_tilt_deg", "resting", "min_gap")
 MESH_KEYS = ("mesh", "units", "name", "count", "color", "density", "place")
-RESTING = ("upright", "any")
 _EXAMPLE = "see tasks/demo.yaml and tasks/printed_parts.yaml"
 
 

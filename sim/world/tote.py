@@ -49,6 +49,6 @@ class ToteLayout:
         """(2, 2) lo and hi corners of the inside, tote frame."""
         return np.array([-self.half_inside, self.half_inside])
 
-    def holds(self, xy_in_tote: np.ndarray) -> bool:
-        """Whether the tote-frame points (N, 2) all lie inside the tote."""
-        return bool(np.all(np.abs(xy_in_tote) <= self.half_inside))
+    def holds(self, xy_in_tote: np.ndarray, margin: float = 0.0) -> bool:
+        """Whether the tote-frame points (N, 2) all lie inside the tote (grown by ``margin``, m, on every side)."""
+        return bool(np.all(np.abs(xy_in_tote) <= self.half_inside + margin))
