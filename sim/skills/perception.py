@@ -30,6 +30,7 @@ from sim.control.ik import T_world_site
 from sim.devices.sensor import DepthCamera, SensorFrame, T_world_camera_opencv, depth_and_bodies
 from sim.errors import SimInputError
 from sim.world import World
+from sim.world.parts import standing_height
 
 CEILING_MARGIN = 0.03  # m above the tallest resting part before a point counts as an intrusion
 INTRUSION_FRACTION = 0.001  # of the image's pixels: fewer intruding points than this are noise
@@ -95,7 +96,7 @@ class Perception:
         self._arm_bodies = np.array([b for b in range(model.nbody) if _descends(model, b, base)])
         places = [f"{name}_fixture" for name in world.T_world_fixtures] + (["tote"] if world.tote is not None else [])
         self._fixture_bodies = np.array([model.body(name).id for name in places], dtype=np.int64)
-        heights = [world.catalog[p].bounds()[1, 2] for p in world.workpieces]
+        heights = [standing_height(world.config, world.catalog[p]) for p in world.workpieces]
         self.ceiling = world.table_top + max(heights) + CEILING_MARGIN
         self._monitor_rays = MONITOR_CAMERA.pixel_rays().reshape(-1, 3)
 

@@ -84,6 +84,16 @@ def drawn_rests(cfg: WorldConfig, types: dict[str, str], meshes: dict, rng) -> d
     return {body: draw_rest(rng, stable_rests(meshes[part])).T_table_model for body, part in types.items()}
 
 
+def standing_height(cfg: WorldConfig, info) -> float:
+    """The tallest (m) a part of ``info`` stands above the table: its upright height, or with ``cfg.resting``
+    ``"any"`` the tallest of its stable rests (a plate drawn on its edge stands as high as it is wide)."""
+    if cfg.resting != "any":
+        return float(info.bounds()[1, 2])
+    from psorr.synthetic.resting import stable_rests
+
+    return max(rest.height for rest in stable_rests(info.load_mesh()))
+
+
 def footprint_sides(mesh, T_table_model=None) -> np.ndarray:
     """(2,) the long and short side (m) of the smallest rectangle around ``mesh``'s footprint as it rests."""
     import trimesh
