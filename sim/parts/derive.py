@@ -218,12 +218,13 @@ def _write_record(path: Path, info: WorkpieceInfo, volume: float, hulls, grasps,
         "collision_files": [str(h.relative_to(path.parent)) for h in hulls],
         "grasps": [{"name": g.name, "point": g.point.tolist(), "approach": g.approach.tolist(),
                     "closing": g.closing.tolist(), "width": g.width} for g in grasps],
-        "seconds": round(seconds, 2), "grasp_params": _grasp_settings(),
+        "seconds": round(seconds, 2), "grasp_params": grasp_settings(),
     }
     path.write_text(json.dumps(record))
 
 
-def _grasp_settings() -> str:
+def grasp_settings() -> str:
+    """The settings grasps are made with, as text: grasps cached under other settings are made again."""
     from sim.parts.grasp_synthesis import GraspSynthesisParams
 
     return repr(GraspSynthesisParams())
@@ -233,7 +234,7 @@ def _read_record(path: Path, part: MeshPart) -> CellPart | None:
     """The cached part, or None when the record is unreadable or names files that are gone."""
     try:
         record = json.loads(path.read_text())
-        if record.get("grasp_params") != _grasp_settings():  # synthesised with other settings: again
+        if record.get("grasp_params") != grasp_settings():  # synthesised with other settings: again
             return None
         hulls = tuple(path.parent / f for f in record["collision_files"])
         grasps = tuple(Grasp(g["name"], g["point"], g["approach"], g["closing"], g["width"]) for g in record["grasps"])

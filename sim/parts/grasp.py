@@ -60,3 +60,13 @@ class Grasp:
         if isinstance(width, bool) or not isinstance(width, (int, float)) or not math.isfinite(width) or width <= 0:
             raise SimInputError(f"{label} width must be a positive number of metres, got {width!r}")
         object.__setattr__(self, "width", float(width))
+
+    def as_record(self) -> dict:
+        """The grasp as JSON-ready numbers (read back by :meth:`from_record`)."""
+        return {"name": self.name, "point": self.point.tolist(), "approach": self.approach.tolist(),
+                "closing": self.closing.tolist(), "width": self.width}
+
+    @classmethod
+    def from_record(cls, record: dict) -> Grasp:
+        """The grasp :meth:`as_record` wrote; KeyError or SimInputError when the record is not one."""
+        return cls(record["name"], record["point"], record["approach"], record["closing"], record["width"])

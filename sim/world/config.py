@@ -11,6 +11,7 @@ from sim.errors import SimInputError
 from sim.parts.source import MeshPart
 
 RESTING = ("upright", "any")
+CATALOG_GRASPS = ("synthesised", "hand-written")
 
 
 @dataclass(frozen=True)
@@ -33,6 +34,9 @@ class WorldConfig:
         resting: ``"upright"``: each part on its largest stable face (its model frame's rest); ``"any"``: each
             in one of its stable rests, drawn by probability (``psorr.synthetic.resting.stable_rests``). A
             part not resting upright is placed in the tote.
+        catalog_grasps: where an upright catalog part's grasps come from: ``"synthesised"`` from its mesh, as
+            any part's (:mod:`sim.parts.catalog_grasps`), or ``"hand-written"`` in the catalog, kept as the
+            reference the episodes benchmark compares them with.
         tote_wall: (thickness, height) of the tote's walls; its inside is sized for the parts it takes.
         fixture_clearance: gap between a part's footprint and its fixture's walls, per side.
         fixture_wall: (thickness, height) of the fixture walls.
@@ -54,6 +58,7 @@ class WorldConfig:
     camera_target: tuple[float, float] = (0.0, 0.0)
     fixtures: bool = True
     resting: str = "upright"
+    catalog_grasps: str = "synthesised"
     tote_wall: tuple[float, float] = (0.006, 0.03)
     fixture_clearance: float = 0.004
     fixture_wall: tuple[float, float] = (0.006, 0.012)
@@ -75,6 +80,9 @@ class WorldConfig:
             raise SimInputError(f"each of mesh_parts must be a MeshPart named once in workpieces; {unnamed} are not")
         if self.resting not in RESTING:
             raise SimInputError(f"resting must be one of {', '.join(RESTING)}, got {self.resting!r}")
+        if self.catalog_grasps not in CATALOG_GRASPS:
+            raise SimInputError(f"catalog_grasps must be one of {', '.join(CATALOG_GRASPS)}, "
+                                f"got {self.catalog_grasps!r}")
         if self.resting == "any" and any(p.place == "fixture" for p in self.mesh_parts):
             raise SimInputError("a part resting any way cannot go to a fixture, which holds it upright: give it "
                                 "place: tote, or resting: upright")

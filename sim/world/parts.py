@@ -10,6 +10,7 @@ import numpy as np
 
 from psorr.synthetic.catalog import load_catalog
 from sim.errors import SimInputError, WorldBuildError
+from sim.parts.catalog_grasps import with_synthesised_grasps
 from sim.parts.derive import CellPart, catalog_part, derive_part
 from sim.parts.source import MeshPart
 from sim.world.assets import COLLISION_DIR
@@ -27,8 +28,9 @@ def collision_index() -> dict:
 
 
 def cell_parts(cfg: WorldConfig, progress=print) -> dict[str, CellPart]:
-    """Each workpiece of ``cfg`` as the cell builds it: a catalog part with its shipped hulls and grasps, a
-    mesh part derived from its mesh (``progress`` hears of a slow first derivation; see :mod:`sim.parts`).
+    """Each workpiece of ``cfg`` as the cell builds it: a catalog part with its shipped hulls and grasps
+    synthesised from its mesh (or the hand-written ones, as ``cfg.catalog_grasps`` says), a mesh part derived
+    from its mesh (``progress`` hears of a slow first derivation; see :mod:`sim.parts`).
 
     Raises:
         SimInputError: a workpiece is neither a catalog part nor one of ``cfg.mesh_parts``.
@@ -52,6 +54,8 @@ def cell_parts(cfg: WorldConfig, progress=print) -> dict[str, CellPart]:
         if index.get(name, {}).get("source_sha256") != digest:
             raise WorldBuildError(f"the collision parts of {name} are missing or older than its mesh; {_REBUILD}")
         parts[name] = catalog_part(name, catalog, index)
+        if cfg.catalog_grasps == "synthesised":
+            parts[name] = with_synthesised_grasps(parts[name], progress)
     return parts
 
 

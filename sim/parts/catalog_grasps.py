@@ -1,0 +1,63 @@
+"""The catalog parts' grasps, synthesised from their meshes as any part's are (:mod:`sim.parts.grasp_synthesis`).
+
+A catalog mesh rests upright in its model frame, so its grasps are those from above the upright part. They are
+synthesised once per mesh and settings and cached beside the derived parts (``cache_dir()/parts/``). The
+hand-written grasps in ``assets/workpieces/catalog.json`` stay as a reference: ``WorldConfig(catalog_grasps=
+"hand-written")`` builds the cell with them, and the episodes benchmark compares the two.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+
+import numpy as np
+
+from sim.parts.derive import CellPart, grasp_settings
+from sim.parts.grasp import Grasp
+
+__all__ = ["with_synthesised_grasps"]
+
+_KIND = "catalog-upright"
+
+
+def with_synthesised_grasps(part: CellPart, progress=print) -> CellPart:
+    """``part`` (a catalog part) with grasps synthesised from its mesh in place of its hand-written ones.
+
+    Raises:
+        PartMeshError: no grasp from above holds the part (the message names the mesh).
+    """
+    info = part.info
+    settings = grasp_settings()
+    digest = hashlib.sha256(info.mesh_path.read_bytes())
+    digest.update(f"{_KIND}:{settings}".encode())
+    from psorr.library.cache import cache_dir
+
+    path = cache_dir() / "parts" / digest.hexdigest()[:24] / f"{info.name}-grasps.json"
+    grasps = _read(path)
+    if grasps is None:
+        if progress is not None:
+            progress(f"synthesising the grasps of {info.name} from {info.mesh_path} (once per mesh)")
+        grasps = _synthesised(part, np.random.default_rng(int(digest.hexdigest()[:8], 16)))
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(json.dumps({"grasp_params": settings, "grasps": [g.as_record() for g in grasps]}))
+    return dataclasses.replace(part, grasps=grasps)
+
+
+def _synthesised(part: CellPart, rng: np.random.Generator) -> tuple[Grasp, ...]:
+    from sim.errors import PartMeshError, SimInputError
+    from sim.parts.grasp_synthesis import synthesise_grasps
+
+    try:
+        return tuple(synthesise_grasps(part.info.load_mesh(), rng))
+    except SimInputError as exc:
+        raise PartMeshError(part.info.mesh_path, str(exc), "give the part hand-written grasps in its catalog, "
+                            "and build the cell with catalog_grasps='hand-written'") from None
+
+
+def _read(path) -> tuple[Grasp, ...] | None:
+    try:
+        return tuple(Grasp.from_record(g) for g in json.loads(path.read_text())["grasps"])
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
