@@ -17,12 +17,14 @@ decomposed at a finer voxel and searched the same way.
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from dataclasses import replace
 
 import numpy as np
 
 from psorr.acceptance.accept import Acceptance
 from psorr.acceptance.claims import PixelClaims, SearchResult, SearchTally
+from psorr.acceptance.known import known_candidates
 from psorr.acceptance.unexplained import DetectedSurfaces
 from psorr.checks import params as check
 from psorr.checks.arrays import random_generator
@@ -90,15 +92,25 @@ class Recognizer:
         # ORR's own table of dense model pairs, built (or read from the training cache) once per recognizer.
         self.orr_table = OrrTable.for_library(library, p.orr.table) if self.method is Method.ORR else None
 
-    def recognize(self, cloud: PointCloud, rng: np.random.Generator | None = None) -> Recognition:
+    def recognize(self, cloud: PointCloud, rng: np.random.Generator | None = None,
+                  known: Sequence[Detection] = ()) -> Recognition:
         """The library's models found in ``cloud`` (metres, sensor frame, seen from the origin; an image or
         unorganised points). Returns a Recognition: the detections in the order they were accepted (by
         score within each search round), each with model name, ``T_cloud_model`` (4, 4), score in [0, 1]
         and the seen share of the model's surface; and stats (hypotheses, verification ms per hypothesis,
         decomposition and total ms). ``rng`` drives the random draws (default: ``default_rng(0)``), so one
-        seed gives the same detections."""
+        seed gives the same detections.
+
+        ``known``: detections an earlier look of the same sensor found (PSORR and PSG, without colour). Each is
+        judged again from its pose, and the search looks only at what they no longer explain
+        (:mod:`psorr.acceptance.known`): a cell that looks again after each pick recognises what moved."""
         if not isinstance(cloud, PointCloud):
             raise InvalidInputError(f"recognize() takes a psorr.PointCloud, got {type(cloud).__name__}")
+        known = known_candidates(self.library, known)
+        if known.candidates and (self.method is Method.ORR or self.use_colour):
+            raise InvalidInputError("recognize()'s known detections are followed by the PSORR and PSG methods "
+                                    f"without colour; this recognizer is {self.method.value}"
+                                    f"{' with colour' if self.use_colour else ''}: pass known=() or use one of them")
         require_seen_from_origin(cloud, "recognize(): the cloud")
         rng = random_generator(rng, "recognize()")
         start = time.perf_counter()
@@ -107,14 +119,17 @@ class Recognizer:
             return Recognition((), RecognitionStats(self.method, 0, 0.0, 0.0, 0.0, self.library.train_ms))
         if self.use_colour:
             return self._per_segment(cloud, rng, start)
-        found = self._find(cloud, rng)
+        found = self._find(cloud, rng, known)
         return Recognition(found.detections, self._stats(found, start))
 
-    def _find(self, cloud: PointCloud, rng: np.random.Generator) -> SearchResult:
+    def _find(self, cloud: PointCloud, rng: np.random.Generator, known: CandidateSet = CandidateSet()) -> SearchResult:
         view = SceneView(cloud)
         if self.method is Method.ORR:
             return self._orr(view, rng)
-        return self._psorr(cloud, view, rng) if self.method is Method.PSORR else self._psg(cloud, view, rng)
+        tally = self._new_tally(view)
+        self._single_search(view, tally, known)
+        search = self._psorr if self.method is Method.PSORR else self._psg
+        return search(cloud, view, rng, tally)
 
     def _per_segment(self, cloud: PointCloud, rng: np.random.Generator, start: float) -> Recognition:
         """Segment by colour and distance, recognise each segment alone, and give each detection its
@@ -167,32 +182,38 @@ class Recognizer:
         tally.add(found.hypotheses, found.verify_ms)
         return tally.result()
 
-    def _psorr(self, cloud: PointCloud, view: SceneView, rng: np.random.Generator) -> SearchResult:
+    def _psorr(self, cloud: PointCloud, view: SceneView, rng: np.random.Generator, tally: SearchTally) -> SearchResult:
         p = self.params
-        tally = self._new_tally(view)
         t0 = time.perf_counter()
         # Only what stands on the table is decomposed, with a band of table around it that keeps the
         # table larger than any model, so it still is not paired as a part's face.
         margin = _TABLE_EXTENT / 2 * self.max_diameter
-        cropped = crop_to_parts(cloud, view.support_plane, margin, p.support_crop)
+        followed = bool(tally.detections)  # known parts followed: the search looks only at what they leave
+        cropped = self._unexplained(crop_to_parts(cloud, view.support_plane, margin, p.support_crop), view, tally,
+                                    margin)
+        if cropped is None:  # the known parts explain all that stands
+            return tally.result()
         scene = decompose_with_leftovers(cropped, self.scene_decompose, p.detail.leftover_voxel, rng)
         tally.decomposition_ms += (time.perf_counter() - t0) * 1e3
         if scene is None:  # too sparse to decompose: nothing to find (as ORR says)
             return tally.result()
         self._search(cloud, view, scene, tally)
         if self.outline is not None:  # parts too small to pair, and pairs' wrong poses, by how parts rest
-            self._single_search(view, tally, self._new_poses(self.outline.candidates(cloud, view), tally))
+            outlined = cropped if followed else cloud
+            self._single_search(view, tally, self._new_poses(self.outline.candidates(outlined, view), tally))
         if p.detail.fine_voxel is not None:
             self._second_look(cloud, cropped, view, margin, tally, rng)
         return tally.result()
 
-    def _psg(self, cloud: PointCloud, view: SceneView, rng: np.random.Generator) -> SearchResult:
+    def _psg(self, cloud: PointCloud, view: SceneView, rng: np.random.Generator, tally: SearchTally) -> SearchResult:
         """The scene decomposed as for PSORR, its shape graph's cliques matched to the models', conflicts
         settled by QPBO, and the poses through the same acceptance."""
-        tally = self._new_tally(view)
         t0 = time.perf_counter()
         margin = _TABLE_EXTENT / 2 * self.max_diameter
-        cropped = crop_to_parts(cloud, view.support_plane, margin, self.params.support_crop)
+        cropped = self._unexplained(crop_to_parts(cloud, view.support_plane, margin, self.params.support_crop),
+                                    view, tally, margin)
+        if cropped is None:
+            return tally.result()
         scene = decompose_with_leftovers(cropped, self.scene_decompose, self.params.detail.leftover_voxel, rng)
         tally.decomposition_ms += (time.perf_counter() - t0) * 1e3
         if scene is None:
@@ -202,6 +223,16 @@ class Recognizer:
         tally.add(found.found.hypotheses, found.found.verify_ms)
         tally.qpbo_nodes, tally.qpbo_unlabelled = found.nodes, found.unlabelled
         return tally.result()
+
+    def _unexplained(self, cropped: PointCloud, view: SceneView, tally: SearchTally, margin: float) -> PointCloud | None:
+        """``cropped`` less the standing points the known parts followed so far explain, with its table band
+        around what is left (as it is when there are none); None when too few stand unexplained to be a part."""
+        if not tally.detections:
+            return cropped
+        p = self.params
+        left = self.detected.unexplained(cropped, view.support_plane, tally.detections, p.support_crop.off_plane,
+                                         _TABLE_EXTENT * self.max_diameter, p.detail.min_unexplained)
+        return None if left is None else crop_to_parts(left, view.support_plane, margin, p.support_crop)
 
     def _second_look(self, cloud, cropped, view, margin, tally: SearchTally, rng) -> None:
         """What stands on the table and no detection explains, decomposed finer and searched again."""

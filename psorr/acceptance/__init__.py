@@ -5,4 +5,5 @@
 - :mod:`~psorr.acceptance.continuation`: the measured surface going on past a pose's outline;
 - :mod:`~psorr.acceptance.ambiguity`: choosing between a model's near-symmetric poses;
 - :mod:`~psorr.acceptance.unexplained`: what no detection explains, for a second, finer look.
+- :mod:`~psorr.acceptance.known`: an earlier look's detections, followed as the first candidates.
 """

@@ -83,6 +83,10 @@ class Perception:
         recognize: run PSORR on each look (False: looks only check occupancy).
         rgb: render the colour image with each look (for a recorder or a viewer; PSORR needs depth only).
 
+    Each look after the first gives PSORR the last recognised look's detections to follow (the camera stands
+    still): they are judged again where they were, and only what they no longer explain is searched, so a
+    look after a pick costs what the part gone and any part it nudged cost (``psorr.acceptance.known``).
+
     Call :meth:`close` (or use it as a context manager) to free the renderers.
     """
 
@@ -91,6 +95,7 @@ class Perception:
         self.camera = DepthCamera(world.model, world.camera_name)
         self._monitor = mujoco.Renderer(world.model, MONITOR_CAMERA.height, MONITOR_CAMERA.width)
         self._recognizer = _recognizer(world) if recognize else None
+        self._known: tuple[Detection, ...] = ()  # the last recognised look's detections, camera frame
         model = world.model
         base = model.body(world.arm.base_body).id
         self._arm_bodies = np.array([b for b in range(model.nbody) if _descends(model, b, base)])
@@ -122,7 +127,8 @@ class Perception:
         detections, estimates = (), {}
         if self._recognizer is not None and not occupied:
             cloud = self._workspace_cloud(frame, world_pts, valid, self.ceiling)
-            detections = tuple(self._recognizer.recognize(cloud, self.rng).detections)
+            detections = tuple(self._recognizer.recognize(cloud, self.rng, known=self._known).detections)
+            self._known = detections
             for det in detections:
                 if det.model in self.world.part_types.values():
                     estimates.setdefault(det.model, []).append(

@@ -71,7 +71,7 @@ def test_the_recognizer_sees_only_the_workspace(world):
         data = world.reset(mujoco.MjData(world.model))
         seen = []
         recognize = p._recognizer.recognize
-        p._recognizer.recognize = lambda cloud, rng: seen.append(cloud) or recognize(cloud, rng)
+        p._recognizer.recognize = lambda cloud, rng, known=(): seen.append(cloud) or recognize(cloud, rng, known=known)
         try:
             look = p.look(data)
         finally:
@@ -87,6 +87,25 @@ def test_the_recognizer_sees_only_the_workspace(world):
     for estimates in look.estimates.values():
         scores = [e.score for e in estimates]
         assert scores == sorted(scores, reverse=True)
+
+
+def test_a_look_again_follows_the_parts_the_last_look_found(world):
+    """The camera stands still: the second look hands PSORR the first look's detections to follow, and
+    finds the same parts where they were."""
+    with Perception(world, np.random.default_rng(1)) as p:
+        data = world.reset(mujoco.MjData(world.model))
+        handed = []
+        recognize = p._recognizer.recognize
+        p._recognizer.recognize = lambda cloud, rng, known=(): handed.append(known) or recognize(cloud, rng, known=known)
+        try:
+            first, second = p.look(data), p.look(data)
+        finally:
+            del p._recognizer.recognize
+    assert handed[0] == () and handed[1] == first.detections
+    assert sorted(first.estimates) == sorted(second.estimates)
+    for part, estimates in first.estimates.items():
+        moved = np.linalg.norm(estimates[0].T_world_part[:3, 3] - second.estimates[part][0].T_world_part[:3, 3])
+        assert moved < 0.002, part
 
 
 # ---------------------------------------------------------------------------------------------- episodes
