@@ -10,6 +10,9 @@ with a catalog grasp and placed in its fixture, from the recognised poses or
 the true ones (oracle), and judged on the simulator's truth. With the
 occluder on, a person reaches over the table now and then; the robot sees
 them in its camera, waits before looking again and stops while they reach.
+
+`grasps TASK.yaml --out DIR` draws each part of a task as the cell builds it, with its grasps in each of
+its most probable rests (the upright part's alone for a part placed upright): one PNG a part.
 """
 
 from __future__ import annotations
@@ -135,6 +138,20 @@ def _run(args) -> int:
     return 0
 
 
+def _grasps(args) -> int:
+    from sim.recording.grasp_pictures import save_grasp_picture
+    from sim.world.parts import cell_parts
+    from sim.world.tasks import load_task
+
+    out = check_output(args.out, "--out")
+    task = load_task(args.task)
+    for name, part in cell_parts(task.world, progress=_log).items():
+        picture = save_grasp_picture(out / f"{name}.png", name, part.info.load_mesh(), part.grasps,
+                                     color=part.info.color)
+        print(f"wrote {picture.path}: {picture.summary}")
+    return 0
+
+
 def summarize(results, episodes: int) -> dict:
     """The `run --json` summary of :class:`sim.episode.EpisodeResult` s (rates over all picks)."""
     picks = [p for r in results for p in r.picks]
@@ -172,6 +189,11 @@ def build_parser() -> argparse.ArgumentParser:
                      help="write each episode's MP4 and a PNG contact sheet (views, recognised poses, grasps) here")
     run.add_argument("--json", action="store_true", help="print one JSON line of summary figures")
     run.set_defaults(run=_run)
+    grasps = sub.add_parser("grasps", help="draw each part of a task with its grasps, a PNG per part")
+    grasps.add_argument("task", metavar="TASK.yaml", help="task file, e.g. tasks/printed_parts.yaml")
+    grasps.add_argument("--out", metavar="DIR", required=True,
+                        help="write <part>.png here, a panel per rest (the 4 most probable with grasps)")
+    grasps.set_defaults(run=_grasps)
     return parser
 
 

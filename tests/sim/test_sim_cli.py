@@ -72,3 +72,22 @@ def test_a_negative_seed_is_a_usage_error_in_every_command():
                              timeout=120)
         assert out.returncode == 2 and "--seed" in out.stderr and "at least 0" in out.stderr, out.stderr
         assert "Traceback" not in out.stderr
+
+
+def test_grasps_draws_a_picture_per_part(tmp_path):
+    out = subprocess.run([sys.executable, "-m", "sim.cli", "grasps", "tasks/demo.yaml", "--out", str(tmp_path / "new")],
+                         capture_output=True, text=True, timeout=600)
+    assert out.returncode == 0, out.stderr
+    parts = ["u_channel", "chassis", "transformer", "flanged_hub"]
+    lines = out.stdout.strip().splitlines()
+    assert [line.split(":")[0] for line in lines] == [f"wrote {tmp_path / 'new' / part}.png" for part in parts]
+    assert all("of the upright part" in line for line in lines)  # catalog parts: grasps of the upright part
+    assert all((tmp_path / "new" / f"{part}.png").stat().st_size > 5_000 for part in parts)
+
+
+def test_grasps_refuses_an_out_that_is_a_file_before_the_work(tmp_path):
+    (tmp_path / "taken").write_text("")
+    out = subprocess.run([sys.executable, "-m", "sim.cli", "grasps", "tasks/demo.yaml", "--out",
+                          str(tmp_path / "taken")], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 2 and "--out" in out.stderr and "is a file; give a folder" in out.stderr, out.stderr
+    assert "Traceback" not in out.stderr
