@@ -27,7 +27,8 @@ from psorr.sensing.camera import CameraIntrinsics
 from psorr.sensing.kinect_noise import KINECT_V1
 from psorr.types import Detection, PointCloud
 from sim.control.ik import T_world_site
-from sim.devices.sensor import DepthCamera, SensorFrame, T_world_camera_opencv, depth_and_bodies
+from sim.devices.depth_render import DepthBodyRenderer
+from sim.devices.sensor import DepthCamera, SensorFrame, T_world_camera_opencv
 from sim.errors import SimInputError
 from sim.world import World
 from sim.world.parts import standing_height
@@ -93,7 +94,8 @@ class Perception:
     def __init__(self, world: World, rng: np.random.Generator, recognize: bool = True, rgb: bool = True):
         self.world, self.rng, self.rgb = world, rng, rgb
         self.camera = DepthCamera(world.model, world.camera_name)
-        self._monitor = mujoco.Renderer(world.model, MONITOR_CAMERA.height, MONITOR_CAMERA.width)
+        self._monitor = DepthBodyRenderer(world.model, MONITOR_CAMERA.height, MONITOR_CAMERA.width,
+                                          world.model.camera(world.camera_name).id)
         self._recognizer = _recognizer(world) if recognize else None
         self._known: tuple[Detection, ...] = ()  # the last recognised look's detections, camera frame
         model = world.model
@@ -101,6 +103,7 @@ class Perception:
         self._arm_bodies = np.array([b for b in range(model.nbody) if _descends(model, b, base)])
         places = [f"{name}_fixture" for name in world.T_world_fixtures] + (["tote"] if world.tote is not None else [])
         self._fixture_bodies = np.array([model.body(name).id for name in places], dtype=np.int64)
+        self._places = [_place_volume(world, name) for name in places]
         heights = [standing_height(world.config, world.catalog[p]) for p in world.workpieces]
         self.ceiling = world.table_top + max(heights) + CEILING_MARGIN
         self._monitor_rays = MONITOR_CAMERA.pixel_rays().reshape(-1, 3)
@@ -158,11 +161,15 @@ class Perception:
 
     def _workspace_cloud(self, frame: SensorFrame, world_pts: np.ndarray, valid: np.ndarray,
                          ceiling: float = np.inf) -> PointCloud:
-        """PSORR's cloud: the ``valid`` points in the workspace up to ``ceiling`` (world z, m), less the
-        fixtures'. Cropped points become NaN, so the cloud stays organised."""
+        """PSORR's cloud: the ``valid`` points in the workspace up to ``ceiling`` (world z, m), less the places
+        (fixtures, the tote) and what stands in them: the robot knows its places, and a part it has placed is
+        not one to find again. Cropped points become NaN, so the cloud stays organised."""
         with np.errstate(invalid="ignore"):
             keep = (valid & self._in_workspace(world_pts) & (world_pts[:, 2] <= ceiling)
                     & ~np.isin(frame.segmentation.ravel(), self._fixture_bodies))
+            for T_body_world, lo, hi in self._places:
+                xy = world_pts @ T_body_world[:2, :3].T + T_body_world[:2, 3]
+                keep &= ~np.all((xy >= lo) & (xy <= hi), axis=1)
         return _masked(frame.cloud, keep)
 
     def _in_workspace(self, world_pts: np.ndarray) -> np.ndarray:
@@ -182,8 +189,7 @@ class Perception:
         jitter, edge dropouts, the shadow band) are below a pixel at this resolution and are left out:
         the full model costs more than the render, and the monitor runs four times a second.
         """
-        self._monitor.update_scene(data, camera=self.world.camera_name)
-        depth, body = depth_and_bodies(self._monitor, self.world.model)
+        depth, body = self._monitor.render(data)
         depth = np.where(np.isin(body, self._arm_bodies), 0.0, depth).ravel()
         keep = depth > 0
         # depth_sigma's disparity step is the full-resolution sensor's, which the monitor's image is binned from.
@@ -209,6 +215,19 @@ class Perception:
 
     def __exit__(self, *exc) -> None:
         self.close()
+
+
+def _place_volume(world: World, body: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A place's (fixture's or tote's) footprint: T_body_world (4, 4) and the (2,) lo, hi corners of its box
+    walls in the body's frame; everything above it belongs to the place."""
+    model, data = world.model, world.data
+    b = model.body(body).id
+    geoms = np.flatnonzero(model.geom_bodyid == b)
+    corners = np.concatenate([model.geom_pos[g, :2] + np.array([[-1, -1], [1, 1]]) * model.geom_size[g, :2]
+                              for g in geoms])
+    T_world_body = np.eye(4)
+    T_world_body[:3, :3], T_world_body[:3, 3] = data.xmat[b].reshape(3, 3), data.xpos[b]
+    return np.linalg.inv(T_world_body), corners.min(axis=0), corners.max(axis=0)
 
 
 def _masked(cloud: PointCloud, keep: np.ndarray) -> PointCloud:
