@@ -1,10 +1,11 @@
-"""A simulated Kinect v1: MuJoCo renders RGB, depth and segmentation, psorr adds the noise.
+"""A simulated Kinect v1: MuJoCo renders RGB, and depth with the body each pixel sees in one pass
+(:class:`sim.devices.depth_render.DepthBodyRenderer`); psorr adds the noise.
 
 Frames. MuJoCo's camera looks along its -z with x right and y up; psorr's clouds use OpenCV
 axes (x right, y down, z forward). :func:`T_world_camera_opencv` is the one place that converts
 between them; everything else (the world's ``T_world_camera``, the frames' clouds) uses it.
 
-Depth. ``mujoco.Renderer`` returns z-depth in metres: the distance along the optical axis, not
+Depth. The renderer returns z-depth in metres: the distance along the optical axis, not
 along the pixel's ray (tests/sim/devices/test_sensor.py checks it on a fronto-parallel plane). That is what
 :func:`psorr.sensing.camera.depth_to_cloud` and the noise model expect.
 
@@ -23,6 +24,7 @@ import numpy as np
 from psorr.sensing.camera import CameraIntrinsics, depth_to_cloud
 from psorr.sensing.kinect_noise import KinectNoise, kinect_noise_with_source
 from psorr.types import PointCloud
+from sim.devices.depth_render import DepthBodyRenderer
 from sim.devices.render_backend import ensure_headless_gl
 from sim.errors import SimInputError
 
@@ -72,21 +74,6 @@ def check_intrinsics(intrinsics: CameraIntrinsics) -> None:
             f"and (cx, cy) = {centred}, got fx={intrinsics.fx}, fy={intrinsics.fy}, "
             f"(cx, cy)=({intrinsics.cx}, {intrinsics.cy})"
         )
-
-
-def depth_and_bodies(renderer: mujoco.Renderer, model: mujoco.MjModel) -> tuple[np.ndarray, np.ndarray]:
-    """Render the scene already set by ``renderer.update_scene``: (H, W) z-depth in metres (0 where
-    no geom is hit, or only the far plane) and the (H, W) int64 id of the body each pixel sees (-1 for
-    none). Leaves the renderer's depth and segmentation modes off."""
-    renderer.enable_depth_rendering()
-    depth = renderer.render().astype(np.float64)
-    renderer.enable_segmentation_rendering()  # switches depth off
-    seg = renderer.render()
-    renderer.disable_segmentation_rendering()
-    is_geom = seg[..., 1] == int(mujoco.mjtObj.mjOBJ_GEOM)  # int: an enum compares per element in Python
-    body = np.where(is_geom, model.geom_bodyid[np.where(is_geom, seg[..., 0], 0)], -1).astype(np.int64)
-    far = 0.99 * model.vis.map.zfar * model.stat.extent
-    return np.where((body >= 0) & (depth < far), depth, 0.0), body
 
 
 @dataclass(frozen=True, eq=False)
@@ -150,7 +137,8 @@ class DepthCamera:
                 f"{intrinsics.height} image: raise visual/global offwidth and offheight"
             )
         ensure_headless_gl()
-        self._renderer = mujoco.Renderer(model, intrinsics.height, intrinsics.width)
+        self._renderer = mujoco.Renderer(model, intrinsics.height, intrinsics.width)  # colour
+        self._depth = DepthBodyRenderer(model, intrinsics.height, intrinsics.width, self._camera_id)
 
     def render(
         self, data: mujoco.MjData, rng: np.random.Generator | None = None, noise: KinectNoise | None = None,
@@ -167,12 +155,11 @@ class DepthCamera:
         """
         if noise is not None and not isinstance(rng, np.random.Generator):
             raise SimInputError("render with noise needs rng, a numpy.random.Generator")
-        r = self._renderer
-        r.disable_depth_rendering()
-        r.disable_segmentation_rendering()
-        r.update_scene(data, camera=self._camera_id)
-        image = r.render().copy() if rgb else None
-        depth, body = depth_and_bodies(r, self.model)
+        image = None
+        if rgb:
+            self._renderer.update_scene(data, camera=self._camera_id)
+            image = self._renderer.render().copy()
+        depth, body = self._depth.render(data)
         colors = image.reshape(-1, 3) if image is not None else None
         if noise is not None:
             depth, source = kinect_noise_with_source(depth, self.intrinsics, rng, noise)
@@ -185,6 +172,7 @@ class DepthCamera:
     def close(self) -> None:
         """Free the renderer's GL context; the camera cannot render afterwards."""
         self._renderer.close()
+        self._depth.close()
 
     def __enter__(self) -> DepthCamera:
         return self
