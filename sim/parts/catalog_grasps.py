@@ -30,7 +30,9 @@ def with_synthesised_grasps(part: CellPart, progress=print) -> CellPart:
     """
     info = part.info
     settings = grasp_settings()
-    digest = hashlib.sha256(info.mesh_path.read_bytes())
+    mesh = hashlib.sha256(info.mesh_path.read_bytes())
+    seed = int(mesh.hexdigest()[:8], 16)  # of the mesh alone: other settings draw the same samples
+    digest = mesh.copy()
     digest.update(f"{_KIND}:{settings}".encode())
     from psorr.library.cache import cache_dir
 
@@ -39,7 +41,7 @@ def with_synthesised_grasps(part: CellPart, progress=print) -> CellPart:
     if grasps is None:
         if progress is not None:
             progress(f"synthesising the grasps of {info.name} from {info.mesh_path} (once per mesh)")
-        grasps = _synthesised(part, np.random.default_rng(int(digest.hexdigest()[:8], 16)))
+        grasps = _synthesised(part, np.random.default_rng(seed))
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(json.dumps({"grasp_params": settings, "grasps": [g.as_record() for g in grasps]}))
     return dataclasses.replace(part, grasps=grasps)
