@@ -149,9 +149,9 @@ def derive_part(part: MeshPart, progress=print) -> CellPart:
     mesh_path = folder / f"{part.name}.stl"
     mesh.export(mesh_path)
     hulls = _hulls(part, mesh_path, folder)
-    grasps = _grasps(part, mesh, np.random.default_rng(int(folder.name[:8], 16)))
+    grasps, trials = _grasps(part, mesh, hulls, np.random.default_rng(int(folder.name[:8], 16)))
     info = _info(part, mesh, mesh_path)
-    _write_record(record, info, float(mesh.volume), hulls, grasps, time.perf_counter() - start)
+    _write_record(record, info, float(mesh.volume), hulls, grasps, trials, time.perf_counter() - start)
     return CellPart(info, hulls, grasps, part)
 
 
@@ -161,14 +161,18 @@ def _hulls(part: MeshPart, mesh_path: Path, folder: Path) -> tuple[Path, ...]:
     return tuple(collision_hulls(mesh_path, folder / "collision"))
 
 
-def _grasps(part: MeshPart, mesh: trimesh.Trimesh, rng: np.random.Generator) -> tuple[Grasp, ...]:
-    """Grasps from above for each way the part can rest (the upright rest's first), in the model frame: a part
-    lying any way on the table is grasped by its rest's grasps, which are the ones whose approach points down."""
+def _grasps(part: MeshPart, mesh: trimesh.Trimesh, hulls, rng: np.random.Generator) -> tuple[tuple[Grasp, ...], list]:
+    """Grasps from above for each way the part can rest (the upright rest's first), in the model frame, and their
+    trials: a part lying any way on the table is grasped by its rest's grasps, those whose approach points down;
+    the best of each rest are tried in MuJoCo (:mod:`sim.parts.grasp_trial`) and those that fail dropped."""
+    from dataclasses import asdict
+
     from psorr.synthetic.resting import stable_rests
     from sim.errors import SimInputError
     from sim.parts.grasp_synthesis import synthesise_grasps
+    from sim.parts.grasp_trial import verified_grasps
 
-    out, why = [], []
+    out, why, trials = [], [], []
     for k, rest in enumerate(_grasped_rests(stable_rests(mesh))):
         posed = mesh.copy()
         posed.apply_transform(rest.T_table_model)
@@ -178,11 +182,16 @@ def _grasps(part: MeshPart, mesh: trimesh.Trimesh, rng: np.random.Generator) -> 
             why.append(f"rest {k}: {str(exc).removeprefix('no top-down grasp of the mesh: ')}")
             continue
         R, t = rest.T_table_model[:3, :3].T, -rest.T_table_model[:3, :3].T @ rest.T_table_model[:3, 3]
-        out += [Grasp(f"rest{k}_{g.name}", R @ g.point + t, R @ g.approach, R @ g.closing, g.width) for g in found]
+        found = [Grasp(f"rest{k}_{g.name}", R @ g.point + t, R @ g.approach, R @ g.closing, g.width) for g in found]
+        verified = verified_grasps(mesh, hulls, part.density * float(mesh.volume), found, rest.T_table_model)
+        trials += [asdict(trial) for trial in verified.trials]
+        if not verified.grasps:  # a pick of a part lying so finds no grasp
+            why.append(f"rest {k}: none held in MuJoCo ({'; '.join(f'{t.grasp} {t.why}' for t in verified.trials)})")
+        out += verified.grasps
     if not out:
         raise PartMeshError(part.path, f"has no grasp from above in any way it rests ({'; '.join(why)})",
                             "choose a part the gripper can hold")
-    return tuple(out)
+    return tuple(out), trials
 
 
 def _grasped_rests(rests) -> list:
@@ -212,12 +221,13 @@ def _grey(name: str) -> tuple[float, float, float]:
     return (0.55 + 0.2 * shade, 0.57 + 0.15 * shade, 0.6 + 0.1 * shade)
 
 
-def _write_record(path: Path, info: WorkpieceInfo, volume: float, hulls, grasps, seconds: float) -> None:
+def _write_record(path: Path, info: WorkpieceInfo, volume: float, hulls, grasps, trials, seconds: float) -> None:
     record = {
         "name": info.name, "volume": volume, "symmetries": info.symmetries.tolist(),
         "collision_files": [str(h.relative_to(path.parent)) for h in hulls],
         "grasps": [{"name": g.name, "point": g.point.tolist(), "approach": g.approach.tolist(),
                     "closing": g.closing.tolist(), "width": g.width} for g in grasps],
+        "grasp_trials": trials,
         "seconds": round(seconds, 2), "grasp_params": grasp_settings(),
     }
     path.write_text(json.dumps(record))
@@ -226,8 +236,9 @@ def _write_record(path: Path, info: WorkpieceInfo, volume: float, hulls, grasps,
 def grasp_settings() -> str:
     """The settings grasps are made with, as text: grasps cached under other settings are made again."""
     from sim.parts.grasp_synthesis import GraspSynthesisParams
+    from sim.parts.grasp_trial import GraspTrialParams
 
-    return repr(GraspSynthesisParams())
+    return f"{GraspSynthesisParams()!r} {GraspTrialParams()!r}"
 
 
 def _read_record(path: Path, part: MeshPart) -> CellPart | None:
