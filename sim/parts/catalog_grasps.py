@@ -1,4 +1,5 @@
-"""The catalog parts' grasps, synthesised from their meshes as any part's are (:mod:`sim.parts.grasp_synthesis`).
+"""The catalog parts' grasps, synthesised from their meshes as any part's are (:mod:`sim.parts.grasp_synthesis`)
+and tried in MuJoCo (:mod:`sim.parts.grasp_trial`).
 
 A catalog mesh rests upright in its model frame, so its grasps are those from above the upright part. They are
 synthesised once per mesh and settings and cached beside the derived parts (``cache_dir()/parts/``). The
@@ -19,7 +20,7 @@ from sim.parts.grasp import Grasp
 
 __all__ = ["with_synthesised_grasps"]
 
-_KIND = "catalog-upright"
+_KIND = "catalog-upright:tried:2"  # what a record holds: a record of another kind is made again
 
 
 def with_synthesised_grasps(part: CellPart, progress=print) -> CellPart:
@@ -41,21 +42,31 @@ def with_synthesised_grasps(part: CellPart, progress=print) -> CellPart:
     if grasps is None:
         if progress is not None:
             progress(f"synthesising the grasps of {info.name} from {info.mesh_path} (once per mesh)")
-        grasps = _synthesised(part, np.random.default_rng(seed))
+        grasps, trials = _synthesised(part, np.random.default_rng(seed))
         path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(json.dumps({"grasp_params": settings, "grasps": [g.as_record() for g in grasps]}))
+        path.write_text(json.dumps({"grasp_params": settings, "grasps": [g.as_record() for g in grasps],
+                                    "grasp_trials": [dataclasses.asdict(t) for t in trials]}))
     return dataclasses.replace(part, grasps=grasps)
 
 
-def _synthesised(part: CellPart, rng: np.random.Generator) -> tuple[Grasp, ...]:
+def _synthesised(part: CellPart, rng: np.random.Generator) -> tuple[tuple[Grasp, ...], tuple]:
+    """The part's grasps from above, synthesised and then tried in MuJoCo (those that fail dropped), and the
+    trials."""
     from sim.errors import PartMeshError, SimInputError
     from sim.parts.grasp_synthesis import synthesise_grasps
+    from sim.parts.grasp_trial import verified_grasps
 
+    fix = "give the part hand-written grasps in its catalog, and build the cell with catalog_grasps='hand-written'"
+    mesh = part.info.load_mesh()
     try:
-        return tuple(synthesise_grasps(part.info.load_mesh(), rng))
+        found = synthesise_grasps(mesh, rng)
     except SimInputError as exc:
-        raise PartMeshError(part.info.mesh_path, str(exc), "give the part hand-written grasps in its catalog, "
-                            "and build the cell with catalog_grasps='hand-written'") from None
+        raise PartMeshError(part.info.mesh_path, str(exc), fix) from None
+    verified = verified_grasps(mesh, part.collision_files, part.info.mass, found)
+    if not verified.grasps:
+        why = "; ".join(f"{t.grasp} {t.why}" for t in verified.trials)
+        raise PartMeshError(part.info.mesh_path, f"no synthesised grasp held in MuJoCo ({why})", fix)
+    return verified.grasps, verified.trials
 
 
 def _read(path) -> tuple[Grasp, ...] | None:
