@@ -3,8 +3,9 @@
 :func:`plan_grasp` takes a part's pose estimate and returns the first of the part's grasps
 (``World.grasps``: the catalog's, or those synthesised from a user's mesh, best first) that
 is narrower than the gripper, not a thin-wall pinch, approached from above, and whose pre-grasp,
-grasp, above-fixture and place poses the IK reaches; grasps whose pads fit inside the fixture's
-pocket come first, the others are released above the pocket's walls. Nothing here reads the
+grasp, above-fixture and place poses the IK reaches. The grasps approached most nearly straight down
+come first (a part lying any way: those made for the rest it lies in), then those whose pads fit inside
+the fixture's pocket; the others are released above the pocket's walls. Nothing here reads the
 simulator's truth: only the estimate, the part's mesh and grasps, and the robot's own kinematics.
 """
 
@@ -143,8 +144,11 @@ def plan_grasp(cell: ArmCell, part: str, T_est: np.ndarray) -> GraspPlan | NoGra
             T_part_tool = np.linalg.inv(T_est) @ T_grasp
             seats = [tote_seat(world, part, T_est, T_part_tool)] if to_tote else \
                 seat_options(cell, info, T_fix, T_part_tool, grasp.width, T_grasp)
+            # The most upright approach first: a part lying any way has grasps for each of its rests, and those
+            # of the rest it lies in approach straight down; another rest's, tilted, may close on air.
+            tilt = float(approach_w[2])
             for seat in seats:
-                candidates.append(((not seat.pads_clear, index, seat.turn_deg), grasp, flip, T_grasp, seat))
+                candidates.append(((tilt, not seat.pads_clear, index, seat.turn_deg), grasp, flip, T_grasp, seat))
     candidates.sort(key=lambda c: c[0])
     for _, grasp, flip, T_grasp, seat in candidates:
         T_place = seat.T_place
