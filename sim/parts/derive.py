@@ -225,8 +225,7 @@ def _write_record(path: Path, info: WorkpieceInfo, volume: float, hulls, grasps,
     record = {
         "name": info.name, "volume": volume, "symmetries": info.symmetries.tolist(),
         "collision_files": [str(h.relative_to(path.parent)) for h in hulls],
-        "grasps": [{"name": g.name, "point": g.point.tolist(), "approach": g.approach.tolist(),
-                    "closing": g.closing.tolist(), "width": g.width} for g in grasps],
+        "grasps": [g.as_record() for g in grasps],
         "grasp_trials": trials,
         "seconds": round(seconds, 2), "grasp_params": grasp_settings(),
     }
@@ -248,7 +247,7 @@ def _read_record(path: Path, part: MeshPart) -> CellPart | None:
         if record.get("grasp_params") != grasp_settings():  # synthesised with other settings: again
             return None
         hulls = tuple(path.parent / f for f in record["collision_files"])
-        grasps = tuple(Grasp(g["name"], g["point"], g["approach"], g["closing"], g["width"]) for g in record["grasps"])
+        grasps = tuple(Grasp.from_record(g) for g in record["grasps"])
         color = part.color if part.color is not None else _grey(part.name)
         info = WorkpieceInfo(part.name, path.with_suffix(".stl"), part.density * float(record["volume"]), color,
                              np.array(record["symmetries"]), None)
