@@ -109,7 +109,8 @@ def pads_clear_fixture(cell: ArmCell, info, T_fix_tool: np.ndarray, width: float
 
 
 def plan_grasp(cell: ArmCell, part: str, T_est: np.ndarray) -> GraspPlan | NoGrasp:
-    """The first reachable grasp, in the part's order, preferring those whose pads fit the fixture's pocket."""
+    """The first reachable grasp: the most nearly straight down first, then those whose pads fit the fixture's
+    pocket, then in the part's order."""
     world = cell.world
     info = world.catalog[part]
     to_tote = world.places.get(part) == "tote"

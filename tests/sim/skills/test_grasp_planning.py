@@ -35,3 +35,21 @@ def test_plans_refuse_a_wound_up_arm_and_an_arm_in_the_table():
     elbow_on_table[cell.qadr[1]] = -0.1  # the upper arm level, the forearm folded back up: the elbow is in the top
     elbow_on_table[cell.qadr[2]] = 2.8
     assert "touch table" in configuration_problem(cell, elbow_on_table)
+
+
+def test_the_grasp_approached_straight_down_is_planned_before_a_tilted_one_listed_first():
+    """A part lying any way has grasps for each rest; another rest's grasp, tilted 30 degrees here, is
+    listed first but must not be taken while the rest's own grasp, straight down, is reachable."""
+    import dataclasses
+    from types import MappingProxyType
+
+    from sim.parts.grasp import Grasp
+    from sim.skills.grasp_planning import plan_grasp
+
+    world = build_world(WorldConfig(workpieces=("u_channel", "chassis")), np.random.default_rng(3))
+    tilt = np.radians(30.0)
+    tilted = Grasp("other_rest", [0.0, 0.0, 0.02], [np.sin(tilt), 0.0, -np.cos(tilt)], [0.0, 1.0, 0.0], 0.05)
+    upright = Grasp("this_rest", [0.0, 0.0, 0.02], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0], 0.05)
+    world = dataclasses.replace(world, grasps=MappingProxyType({**world.grasps, "u_channel": (tilted, upright)}))
+    plan = plan_grasp(ArmCell(world), "u_channel", world.T_world_workpieces["u_channel"])
+    assert plan.grasp.name == "this_rest"
