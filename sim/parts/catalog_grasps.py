@@ -15,6 +15,7 @@ import json
 
 import numpy as np
 
+from sim.parts import tell
 from sim.parts.derive import CellPart, grasp_settings
 from sim.parts.grasp import Grasp
 
@@ -23,7 +24,7 @@ __all__ = ["with_synthesised_grasps"]
 _KIND = "catalog-upright:tried:2"  # what a record holds: a record of another kind is made again
 
 
-def with_synthesised_grasps(part: CellPart, progress=print) -> CellPart:
+def with_synthesised_grasps(part: CellPart, progress=tell) -> CellPart:
     """``part`` (a catalog part) with grasps synthesised from its mesh in place of its hand-written ones.
 
     Raises:

@@ -22,6 +22,7 @@ import trimesh
 from psorr.errors import PsorrError
 from psorr.synthetic.catalog import WorkpieceInfo
 from sim.errors import PartMeshError
+from sim.parts import tell
 from sim.parts.grasp import Grasp
 from sim.parts.source import MeshPart
 
@@ -124,7 +125,7 @@ def _check_size(part: MeshPart, outline: np.ndarray) -> None:
                             "give the right units, or a larger part")
 
 
-def derive_part(part: MeshPart, progress=print) -> CellPart:
+def derive_part(part: MeshPart, progress=tell) -> CellPart:
     """``part`` as the cell builds it, derived once and then read from the cache (see the module).
 
     Args:

@@ -10,6 +10,7 @@ import numpy as np
 
 from psorr.synthetic.catalog import load_catalog
 from sim.errors import SimInputError, WorldBuildError
+from sim.parts import tell
 from sim.parts.catalog_grasps import with_synthesised_grasps
 from sim.parts.derive import CellPart, catalog_part, derive_part
 from sim.parts.source import MeshPart
@@ -27,7 +28,7 @@ def collision_index() -> dict:
     return json.loads(path.read_text())["parts"]
 
 
-def cell_parts(cfg: WorldConfig, progress=print) -> dict[str, CellPart]:
+def cell_parts(cfg: WorldConfig, progress=tell) -> dict[str, CellPart]:
     """Each workpiece of ``cfg`` as the cell builds it: a catalog part with its shipped hulls and grasps
     synthesised from its mesh (or the hand-written ones, as ``cfg.catalog_grasps`` says), a mesh part derived
     from its mesh (``progress`` hears of a slow first derivation; see :mod:`sim.parts`).

@@ -46,3 +46,10 @@ def test_the_hand_written_grasps_are_kept_as_a_reference(cache):
 def test_an_unknown_grasp_source_is_refused_naming_the_choices():
     with pytest.raises(SimInputError, match="synthesised, hand-written"):
         WorldConfig(catalog_grasps="drawn")
+
+
+def test_the_first_synthesis_is_told_on_stderr_leaving_stdout_to_results(cache, capsys):
+    """psorr-sim's --json prints exactly one line on stdout: news of a slow first synthesis goes to stderr."""
+    cell_parts(WorldConfig(workpieces=("u_channel",)))
+    out, err = capsys.readouterr()
+    assert out == "" and "synthesising the grasps of u_channel" in err
