@@ -133,7 +133,8 @@ def _against_hand_written(rec: dict, rows: list[dict]) -> list[tuple[str, bool]]
     if hand is None:
         return []
     what = (f"synthesised grasps at least as good as hand-written (grasp {rec['grasp_success_rate']:.1%} vs "
-            f"{hand['grasp_success_rate']:.1%}, place {rec['place_success_rate']:.1%} vs {hand['place_success_rate']:.1%})")
+            f"{hand['grasp_success_rate']:.1%}, place {rec['place_success_rate']:.1%} vs "
+            f"{hand['place_success_rate']:.1%})")
     return [(what, rec["grasp_success_rate"] >= hand["grasp_success_rate"]
              and rec["place_success_rate"] >= hand["place_success_rate"])]
 

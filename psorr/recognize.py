@@ -50,6 +50,7 @@ from psorr.sensing.resolution import thin_to_focal
 from psorr.types import Detection, PointCloud, PrimitiveKind
 from psorr.verification.scene_view import SceneView
 
+_NONE_KNOWN = CandidateSet()  # no earlier look's detections to follow
 _TABLE_EXTENT = 1.2  # in diameters of the largest model: a primitive larger than this is the table
 
 
@@ -122,7 +123,7 @@ class Recognizer:
         found = self._find(cloud, rng, known)
         return Recognition(found.detections, self._stats(found, start))
 
-    def _find(self, cloud: PointCloud, rng: np.random.Generator, known: CandidateSet = CandidateSet()) -> SearchResult:
+    def _find(self, cloud: PointCloud, rng: np.random.Generator, known: CandidateSet = _NONE_KNOWN) -> SearchResult:
         view = SceneView(cloud)
         if self.method is Method.ORR:
             return self._orr(view, rng)
@@ -224,7 +225,8 @@ class Recognizer:
         tally.qpbo_nodes, tally.qpbo_unlabelled = found.nodes, found.unlabelled
         return tally.result()
 
-    def _unexplained(self, cropped: PointCloud, view: SceneView, tally: SearchTally, margin: float) -> PointCloud | None:
+    def _unexplained(self, cropped: PointCloud, view: SceneView, tally: SearchTally,
+                     margin: float) -> PointCloud | None:
         """``cropped`` less the standing points the known parts followed so far explain, with its table band
         around what is left (as it is when there are none); None when too few stand unexplained to be a part."""
         if not tally.detections:

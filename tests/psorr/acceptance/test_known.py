@@ -36,7 +36,8 @@ def _found(detections, scene, library) -> set[str]:
     for d in detections:
         inst = next(i for i in scene.instances if i.name == d.model)
         model = library.model(d.model)
-        if symmetric_add(model.points[::10], d.T_cloud_model, inst.T_camera_model, catalog[d.model]) < 0.1 * model.diameter:
+        add = symmetric_add(model.points[::10], d.T_cloud_model, inst.T_camera_model, catalog[d.model])
+        if add < 0.1 * model.diameter:
             out.add(d.model)
     return out
 

@@ -1,6 +1,7 @@
 """The robot's perception in the cell (sim/skills/perception.py), the reaching person (sim/people/occluder.py
 ReachingHuman) and how episodes react to them (sim/episode.py). Headless."""
 
+import contextlib
 import math
 
 import mujoco
@@ -64,20 +65,25 @@ def test_the_part_in_the_hand_is_not_an_intrusion(world, perception):
     assert perception.look(data, holding="u_channel").intruding < 50
 
 
+@contextlib.contextmanager
+def _recognizer_calls(perception):
+    """The (cloud, known) of each call the looks make to PSORR, while in the block."""
+    calls, recognize = [], perception._recognizer.recognize
+    perception._recognizer.recognize = lambda cloud, rng, known=(): calls.append((cloud, known)) or recognize(
+        cloud, rng, known=known)
+    try:
+        yield calls
+    finally:
+        del perception._recognizer.recognize  # the recognizer is shared: back to its class's method
+
+
 def test_the_recognizer_sees_only_the_workspace(world):
     """PSORR gets the cloud cropped to the table (less the arm and the fixtures, which the robot knows):
     the person standing beyond the edge is not in it, and every estimate it returns is of a task part."""
-    with Perception(world, np.random.default_rng(1)) as p:
-        data = world.reset(mujoco.MjData(world.model))
-        seen = []
-        recognize = p._recognizer.recognize
-        p._recognizer.recognize = lambda cloud, rng, known=(): seen.append(cloud) or recognize(cloud, rng, known=known)
-        try:
-            look = p.look(data)
-        finally:
-            del p._recognizer.recognize  # the recognizer is shared: back to its class's method
+    with Perception(world, np.random.default_rng(1)) as p, _recognizer_calls(p) as calls:
+        look = p.look(world.reset(mujoco.MjData(world.model)))
     body = look.frame.segmentation.ravel()
-    kept = np.isfinite(seen[0].points).all(axis=1)
+    kept = np.isfinite(calls[0][0].points).all(axis=1)
     fixtures = [world.model.body(f"{name}_fixture").id for name in PARTS]
     assert np.isin(body, fixtures).sum() > 500 and not kept[np.isin(body, fixtures)].any()
     parts = [world.model.body(name).id for name in PARTS]
@@ -92,16 +98,10 @@ def test_the_recognizer_sees_only_the_workspace(world):
 def test_a_look_again_follows_the_parts_the_last_look_found(world):
     """The camera stands still: the second look hands PSORR the first look's detections to follow, and
     finds the same parts where they were."""
-    with Perception(world, np.random.default_rng(1)) as p:
+    with Perception(world, np.random.default_rng(1)) as p, _recognizer_calls(p) as calls:
         data = world.reset(mujoco.MjData(world.model))
-        handed = []
-        recognize = p._recognizer.recognize
-        p._recognizer.recognize = lambda cloud, rng, known=(): handed.append(known) or recognize(cloud, rng, known=known)
-        try:
-            first, second = p.look(data), p.look(data)
-        finally:
-            del p._recognizer.recognize
-    assert handed[0] == () and handed[1] == first.detections
+        first, second = p.look(data), p.look(data)
+    assert calls[0][1] == () and calls[1][1] == first.detections
     assert sorted(first.estimates) == sorted(second.estimates)
     for part, estimates in first.estimates.items():
         moved = np.linalg.norm(estimates[0].T_world_part[:3, 3] - second.estimates[part][0].T_world_part[:3, 3])
