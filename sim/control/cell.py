@@ -258,12 +258,7 @@ class ArmCell:
         self.step(round(seconds / dt))
 
     def pads_touch(self, body: int) -> bool:
-        touched = set()
-        for c in self.data.contact[: self.data.ncon]:
-            for a, b in ((c.geom1, c.geom2), (c.geom2, c.geom1)):
-                if a in self.pads and self.model.geom_bodyid[b] == body:
-                    touched.add(a)
-        return len(touched) == len(self.pads)
+        return pads_on_body(self.model, self.data, self.pads, body) == len(self.pads)
 
     def look_pose(self) -> np.ndarray:
         """Arm joints (6,) of the pose the robot looks from: home, panned aside out of the camera's view."""
@@ -282,3 +277,10 @@ class ArmCell:
         q = self.data.qpos.copy()
         q[self.qadr] = self.data.ctrl[self.act]
         return q
+
+
+def pads_on_body(model: mujoco.MjModel, data: mujoco.MjData, pads, body: int) -> int:
+    """How many of the geoms ``pads`` (ids) are in contact with a geom of ``body`` now."""
+    pairs = data.contact.geom[: data.ncon]
+    other_on_body = (model.geom_bodyid[pairs] == body)[:, ::-1]
+    return sum(bool(np.any(other_on_body & (pairs == pad))) for pad in pads)

@@ -19,9 +19,11 @@ import trimesh
 
 from psorr.checks import params as check
 from psorr.errors import InvalidInputError
+from sim.control.cell import pads_on_body
 from sim.errors import SimInputError
 from sim.parts.grasp import Grasp
-from sim.skills.grasp_planning import LIFT, angle_deg, shift, tool_pose
+from sim.skills.grasp_planning import LIFT, angle_deg, from_above, shift, tool_pose
+from sim.world.assembly import add_part_body
 from sim.world.built import pose_matrix, quat_of
 from sim.world.robot import apply_arm_options, load_arm_spec
 
@@ -208,9 +210,8 @@ class _Scene:
 
     def pads_touching(self) -> int:
         """How many of the two pads touch the part now."""
-        pairs = self.data.contact.geom[: self.data.ncon]
-        other_on_part = (self.model.geom_bodyid[pairs] == self.model.body("part").id)[:, ::-1]
-        return sum(bool(np.any(other_on_part & (pairs == self.model.geom(pad).id))) for pad in _PADS)
+        pads = [self.model.geom(pad).id for pad in _PADS]
+        return pads_on_body(self.model, self.data, pads, self.model.body("part").id)
 
     def watch(self) -> None:
         """From now on, slip is measured against the part's pose in the tool frame now."""
@@ -229,16 +230,12 @@ class _Scene:
 
 def _spec(mesh: trimesh.Trimesh, hull_files, mass: float, T: np.ndarray) -> mujoco.MjSpec:
     """The table plane; the part, a free body (body frame = model frame) at ``T`` with its hulls, mass and inertia
-    (as :func:`sim.world.assembly._add_workpiece` has it, less the visual mesh); the arm's "gripper" body (and what
+    (:func:`sim.world.assembly.add_part_body`, as the cell's parts); the arm's "gripper" body (and what
     refers to it: tendon, equality, actuator, exclude) on a free joint, welded to the mocap body "target"."""
     spec = mujoco.MjSpec()
     apply_arm_options(spec)
     spec.worldbody.add_geom(name="table", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.05])
-    body = spec.worldbody.add_body(name="part", pos=T[:3, 3], quat=quat_of(T[:3, :3]))
-    body.add_freejoint(name="part_joint")
-    body.explicitinertial, body.mass, body.ipos = True, float(mass), mesh.center_mass
-    I = mesh.moment_inertia * (mass / mesh.mass)  # noqa: E741 - about the centre of mass, model axes
-    body.fullinertia = [I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2]]
+    body = add_part_body(spec, "part", mesh, float(mass), T[:3, 3], quat_of(T[:3, :3]))
     for k, file in enumerate(hull_files):
         spec.add_mesh(name=f"hull_{k}", file=str(file))
         body.add_geom(name=f"part_hull_{k}", type=mujoco.mjtGeom.mjGEOM_MESH, meshname=f"hull_{k}")
@@ -259,7 +256,7 @@ def _trial(scene: _Scene, grasp: Grasp) -> GraspTrial:
     if scene.settling:
         return GraspTrial(grasp.name, False, None, None, f"the part did not stay so: it moved {scene.settling}")
     params, zero, T_tool = scene.params, np.zeros(3), tool_pose(scene.T_world_part, grasp, flip=False)
-    if T_tool[2, 2] > -0.7:  # as the planner: only roughly top-down approaches
+    if not from_above(T_tool[:3, 2]):  # as the planner
         return GraspTrial(grasp.name, False, None, None, "is not approached from above in this rest")
     T_grasp = T_tool @ np.linalg.inv(scene.T_gripper_tool)
     reach = float(scene.model.geom_size[[scene.model.geom(p).id for p in _PADS], 2].max())  # below the tool

@@ -30,6 +30,12 @@ WALL_CLEARANCE = 0.002  # m between the pads' lower ends and the fixture walls' 
 TOTE_DROP = 0.004  # m above the tote's floor a part is let go: set down, not dropped, yet clear of the floor
 
 
+def from_above(approach_world: np.ndarray) -> bool:
+    """Whether an approach direction (3,; world, unit) comes roughly from above, within about 46 degrees of
+    straight down: the table is in the way of any other."""
+    return bool(approach_world[2] <= -0.7)
+
+
 def angle_deg(R: np.ndarray) -> float:
     """Rotation angle (degrees) of a (3, 3) rotation matrix."""
     return float(np.degrees(np.arccos(np.clip((np.trace(R) - 1.0) / 2.0, -1.0, 1.0))))
@@ -129,7 +135,7 @@ def plan_grasp(cell: ArmCell, part: str, T_est: np.ndarray) -> GraspPlan | NoGra
             reasons.append(f"{grasp.name}: pinch of {grasp.width * 1e3:.1f} mm not attempted")
             continue
         approach_w = T_est[:3, :3] @ grasp.approach
-        if approach_w[2] > -0.7:  # only roughly top-down approaches: the table is in the way otherwise
+        if not from_above(approach_w):
             reasons.append(f"{grasp.name}: approach not from above")
             continue
         for flip in (False, True):
@@ -209,7 +215,7 @@ def seat_options(cell: ArmCell, info, T_fix: np.ndarray, T_part_tool: np.ndarray
     out = []
     for S in info.symmetries:
         T_place = T_fix @ S @ T_part_tool
-        if T_place[2, 2] > -0.7:
+        if not from_above(T_place[:3, 2]):
             continue
         clears = pads_clear_fixture(cell, info, S @ T_part_tool, width)
         out.append(SeatOption(T_place, clears, angle_deg(T_grasp[:3, :3].T @ T_place[:3, :3])))

@@ -100,16 +100,23 @@ def _add_part_assets(spec, part: CellPart) -> None:
         spec.add_mesh(name=f"{name}_collision_{k}", file=str(file))
 
 
-def _add_workpiece(spec, body_name: str, part: CellPart, mesh, pos, quat) -> None:
-    """A free body ``body_name`` of ``part``: its visual mesh, collision hulls, mass and inertia."""
-    info, name = part.info, part.name
+def add_part_body(spec: mujoco.MjSpec, body_name: str, mesh, mass: float, pos, quat):
+    """A free body ``body_name`` (its joint ``<body_name>_joint``; body frame = model frame) of ``mass`` kg with
+    the inertia of the solid ``mesh`` (model frame, metres), at ``pos``, ``quat``; its geoms are the caller's."""
     body = spec.worldbody.add_body(name=body_name, pos=pos, quat=quat)
     body.add_freejoint(name=f"{body_name}_joint")
     body.explicitinertial = True
-    body.mass = info.mass
+    body.mass = mass
     body.ipos = mesh.center_mass
-    I = mesh.moment_inertia * (info.mass / mesh.mass)  # noqa: E741 - about the centre of mass, model axes
+    I = mesh.moment_inertia * (mass / mesh.mass)  # noqa: E741 - about the centre of mass, model axes
     body.fullinertia = [I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2]]
+    return body
+
+
+def _add_workpiece(spec, body_name: str, part: CellPart, mesh, pos, quat) -> None:
+    """A free body ``body_name`` of ``part``: its visual mesh, collision hulls, mass and inertia."""
+    name = part.name
+    body = add_part_body(spec, body_name, mesh, part.info.mass, pos, quat)
     body.add_geom(default=spec.find_default("visual"), name=f"{body_name}_visual", type=_GEOM.mjGEOM_MESH,
                   meshname=name, material=f"{name}_material")
     for k in range(len(part.collision_files)):
