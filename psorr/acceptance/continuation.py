@@ -7,7 +7,8 @@ clouds). What tells them apart lies just outside the model: there the box's face
 planes of the model's faces, where a real bracket's outline would show the table or a gap.
 
 The check looks at a ring of pixels around the pose's silhouette (every posed model point, gaps
-between samples closed) and asks, for each measured ring pixel off the supporting plane, whether it lies
+between samples closed), where the outline is in view (beside model points the sensor measures, not
+beside an occluder), and asks, for each measured ring pixel off the supporting plane, whether it lies
 on the tangent plane of one of the visible model points nearest it in space. One nearest point is not
 enough: past a bracket's leg the nearest points are on the leg's 5 mm top edge, whose plane is across
 the box face that goes on above the leg, and the leg's own face is a few millimetres further. The
@@ -73,6 +74,7 @@ def continued_share(view: SceneView, model_points: np.ndarray, model_normals: np
     covered[every_v[in_window] - v0, every_u[in_window] - u0] = True
     silhouette = binary_closing(covered, iterations=2)  # the visible points are among them
     ring = binary_dilation(silhouette, iterations=reach) & ~silhouette
+    ring &= _around_measured(view, pts[visible], u, v, (u0, v0), shape, reach, params)
     rv, ru = np.nonzero(ring)
     depth = view.depth[(rv + v0) * view.width + (ru + u0)]
     measured = np.isfinite(depth)
@@ -89,6 +91,19 @@ def continued_share(view: SceneView, model_points: np.ndarray, model_normals: np
     if view.support_plane is not None:
         on_face &= q @ view.support_plane[:3] + view.support_plane[3] > params.off_support
     return float(on_face.mean())
+
+
+def _around_measured(view: SceneView, points: np.ndarray, u: np.ndarray, v: np.ndarray, corner: tuple[int, int],
+                     shape: tuple[int, int], reach: int, params: ContinuationParams) -> np.ndarray:
+    """The window's pixels (``shape``, from ``corner`` u0, v0) within ``reach`` of where the visible model
+    ``points`` (at pixels ``u``, ``v``) are measured. Only there does the outline show: where something
+    nearer hides the model, what lies around its outline is that occluder, whose surface may well cross
+    the planes of the model's faces (an arm across a chassis's walls)."""
+    u0, v0 = corner
+    measured = np.abs(points[:, 2] - view.depth[v * view.width + u]) < depth_tolerance(points[:, 2], params.check)
+    shown = np.zeros(shape, dtype=bool)
+    shown[v[measured] - v0, u[measured] - u0] = True
+    return binary_dilation(binary_closing(shown, iterations=2), iterations=reach + 2)
 
 
 def on_larger_object(view: SceneView, model_points: np.ndarray, model_normals: np.ndarray, T_cloud_model: np.ndarray,

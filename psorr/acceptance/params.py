@@ -38,8 +38,8 @@ class AcceptParams:
     max_float: float | None = 0.02  # None: parts piled on one another
     max_shared_pixels: float = 0.3
     # None turns the check off (it costs about 2 ms a scene): parts flush with larger objects (stacked edge
-    # to edge, in a fitting corner) need it off.
-    max_continued: float | None = 0.2
+    # to edge, in a fitting corner) need it off. Measured: docs/decisions/0026-continuation-check.md.
+    max_continued: float | None = 0.1
     continuation: ContinuationParams = field(default_factory=ContinuationParams)
 
     def __post_init__(self):
