@@ -235,10 +235,10 @@ def _write_record(path: Path, info: WorkpieceInfo, volume: float, hulls, grasps,
 
 def grasp_settings() -> str:
     """The settings grasps are made with, as text: grasps cached under other settings are made again."""
-    from sim.parts.grasp_synthesis import REVISION, GraspSynthesisParams
+    from sim.parts.grasp_synthesis import GraspSynthesisParams
     from sim.parts.grasp_trial import GraspTrialParams
 
-    return f"revision {REVISION}: {GraspSynthesisParams()!r} {GraspTrialParams()!r}"
+    return f"{GraspSynthesisParams()!r} {GraspTrialParams()!r}"
 
 
 def _read_record(path: Path, part: MeshPart) -> CellPart | None:

@@ -29,24 +29,11 @@ from psorr.checks import params as check
 from psorr.errors import InvalidInputError
 from sim.errors import SimInputError
 from sim.parts.grasp import Grasp
-from sim.parts.grasp_refusals import cone_deg, too_wide, why_not
-from sim.parts.gripper_fit import (
-    Fit,
-    Frames,
-    Surface,
-    ahead,
-    distinct,
-    measure,
-    off_centre,
-    over_own_floor,
-    perturbed_share,
-    unique,
-)
+from sim.parts.gripper_fit import Fit, Frames, Surface, ahead, distinct, measure, perturbed_share, unique
 
 __all__ = ["GraspSynthesisParams", "synthesise_grasps"]
 
 _TABLE_TOL = 1e-6  # m the mesh's lowest point may lie off z = 0
-REVISION = 2  # raised when the same settings make other grasps: grasps cached by an earlier revision are made again
 
 
 @dataclass(frozen=True)
@@ -73,8 +60,7 @@ class GraspSynthesisParams:
         sample_spacing: mean spacing of the dense surface samples, at most ``max_samples`` of them.
         max_samples: cap on the dense samples; a larger part is sampled more sparsely.
         seeds: surface points drawn as seeds.
-        pose_error: shift of the recognizer's typical pose error that the ranking allows for; the pads also
-            keep it above a floor of the part's own (which the pose places) besides ``table_clearance``.
+        pose_error: shift of the recognizer's typical pose error that the ranking allows for.
         pose_error_deg: turn (degrees, about the vertical) of that error.
         perturbations: seeded shifted-and-turned poses each grasp is ranked on.
         com_weight: score lost (in shares of a pad's face) per footprint half-diagonal off the centre of mass.
@@ -179,17 +165,16 @@ def synthesise_grasps(mesh: trimesh.Trimesh, rng: np.random.Generator,
     seeds = _seed_frames(mesh, surface, rng, params)
     frames = _recentre(seeds, measure(surface, seeds, params), params)
     fit = measure(surface, frames, params, params.min_contact_share * params.pad_area)
-    frames, fit = over_own_floor(surface, frames, fit, params, _TABLE_TOL)
     ok = _fits(fit, params) & ~fit.collides
     if not ok.any():
-        raise SimInputError(f"no top-down grasp of the mesh: {why_not(fit, params)}")
-    fit, frames = fit.take(ok), frames.take(ok)
+        raise SimInputError(f"no top-down grasp of the mesh: {_why_not(fit, params)}")
+    fit, frames = Fit(fit.lo[ok], fit.hi[ok], fit.areas[ok], fit.contact[ok], fit.collides[ok]), frames.take(ok)
     frames = Frames(frames.origins + frames.along((fit.lo + fit.hi) / 2), frames.closing)  # the tool between
-    away = params.com_weight * off_centre(frames, mesh)
+    off_centre = params.com_weight * _off_centre(frames, mesh)
     # The distinct placements (each the best of its neighbours, nominally) are ranked on perturbed contact.
-    order = np.argsort(away - fit.areas.min(1) / params.pad_area, kind="stable")
+    order = np.argsort(off_centre - fit.areas.min(1) / params.pad_area, kind="stable")
     order = order[distinct(frames.take(order), params)][: 4 * params.max_grasps]
-    score = perturbed_share(surface, frames.take(order), rng, params) - away[order]
+    score = perturbed_share(surface, frames.take(order), rng, params) - off_centre[order]
     best = order[np.argsort(-score, kind="stable")][: params.max_grasps]
     return tuple(Grasp(f"synth_{k}", frames.origins[i], (0.0, 0.0, -1.0), (*frames.closing[i], 0.0),
                        float(fit.width[i])) for k, i in enumerate(best))
@@ -215,13 +200,13 @@ def _seed_frames(mesh: trimesh.Trimesh, surface: Surface, rng: np.random.Generat
     level = np.hypot(normals[:, 0], normals[:, 1])
     flat = level >= params.cos_cone
     if not flat.any():
-        raise SimInputError(f"no top-down grasp of the mesh: no side of it is within {cone_deg(params):.0f} deg "
+        raise SimInputError(f"no top-down grasp of the mesh: no side of it is within {_cone_deg(params):.0f} deg "
                             "of vertical for the pads to press on")
     seeds = Frames(points[flat], -normals[flat, :2] / level[flat, None])
     span, floor = ahead(surface, seeds, params)
     found = span <= params.max_opening
     if not found.any():
-        raise SimInputError(f"no top-down grasp of the mesh: {too_wide(span[np.isfinite(span)], params)}")
+        raise SimInputError(f"no top-down grasp of the mesh: {_too_wide(span[np.isfinite(span)], params)}")
     return _placements(seeds.take(found), span[found], floor[found], params)
 
 
@@ -261,3 +246,45 @@ def _fits(fit: Fit, params: GraspSynthesisParams) -> np.ndarray:
     width = fit.width
     return (np.isfinite(fit.lo) & (width >= params.min_width) & (width <= params.widest)
             & (fit.areas.min(1) >= params.min_contact_share * params.pad_area))
+
+
+def _why_not(fit: Fit, params: GraspSynthesisParams) -> str:
+    """Why no frame is kept, by the first test that every frame failed."""
+    touched = np.isfinite(fit.lo)
+    width = fit.width[touched]
+    if not width.size:
+        return f"nowhere do both pads touch it: no two of its sides face each other within {_cone_deg(params):.0f} deg"
+    fits = (width >= params.min_width) & (width <= params.widest)
+    if not fits.any():
+        if width.min() > params.widest:
+            return _too_wide(width, params)
+        if width.max() < params.min_width:
+            return (f"every span across it is thinner than the {params.min_width * 1e3:.0f} mm the planner "
+                    f"grasps (widest {width.max() * 1e3:.1f} mm)")
+        return (f"every span across it is under {params.min_width * 1e3:.0f} mm (a pinch the planner does not "
+                f"try) or over the {params.widest * 1e3:.0f} mm the open gripper clears")
+    worse, need = fit.areas[touched][fits].min(1), params.min_contact_share * params.pad_area
+    if worse.max() < need:
+        return (f"the pads would touch too little of it: at best {worse.max() * 1e6:.0f} mm^2 on the worse side, "
+                f"{need * 1e6:.0f} mm^2 needed (its sides are too low, rounded or sloped)")
+    return (f"the fingers or the palm would hit it at each of the {int((worse >= need).sum())} places where "
+            "its sides fit the gripper")
+
+
+def _too_wide(spans: np.ndarray, params: GraspSynthesisParams) -> str:
+    if not spans.size:
+        return f"no two of its sides face each other within {_cone_deg(params):.0f} deg for the pads to close on"
+    narrowest = float(spans.min())
+    units = "; is the mesh in millimetres? scale it by 0.001" if narrowest > 10 * params.max_opening else ""
+    return (f"too wide for the gripper from every side: narrowest span {narrowest * 1e3:.0f} mm, the gripper "
+            f"opens {params.max_opening * 1e3:.0f} mm{units}")
+
+
+def _cone_deg(params: GraspSynthesisParams) -> float:
+    return math.degrees(math.acos(params.cos_cone))
+
+
+def _off_centre(frames: Frames, mesh: trimesh.Trimesh) -> np.ndarray:
+    """(F,) horizontal distance of each tool point from the centre of mass, in footprint half-diagonals."""
+    com = mesh.center_mass if mesh.is_watertight else mesh.convex_hull.center_mass
+    return np.hypot(*(frames.origins[:, :2] - com[:2]).T) / (0.5 * np.hypot(*mesh.extents[:2]))

@@ -76,9 +76,6 @@ class Fit:
     def width(self) -> np.ndarray:
         return self.hi - self.lo
 
-    def take(self, keep) -> Fit:
-        return Fit(self.lo[keep], self.hi[keep], self.areas[keep], self.contact[keep], self.collides[keep])
-
 
 def measure(surface: Surface, frames: Frames, params: GraspSynthesisParams, min_area: float | None = None,
             centred: bool = True) -> Fit:
@@ -121,43 +118,6 @@ def ahead(surface: Surface, seeds: Frames, params: GraspSynthesisParams) -> tupl
 
     span, floor = _in_chunks(surface, seeds, chunk_ahead)
     return span, floor
-
-
-def _floor_beside(surface: Surface, frames: Frames, fit: Fit, params: GraspSynthesisParams) -> np.ndarray:
-    """(F,) m: the highest surface of the part below each tool point, where its fingers come down beside what
-    its pads stop on (``fit``); 0 where that is the table."""
-    tol, lane = params.contact_tolerance, params.finger_half_size[1] + params.clearance
-    reach = params.max_opening / 2 + params.finger_offset[0] + params.finger_half_size[0] + params.clearance
-    z = surface.points[:, 2]
-
-    def chunk_floor(chunk: Frames, lo: np.ndarray, hi: np.ndarray) -> tuple:
-        u, v = coordinate(surface, chunk, chunk.closing), coordinate(surface, chunk, chunk.across)
-        lo, hi = lo[:, None].astype(np.float32), hi[:, None].astype(np.float32)
-        beside = (np.abs(v) <= lane) & ((u < lo - tol) | (u > hi + tol)) & (np.abs(u - (lo + hi) / 2) <= reach) \
-            & (z < chunk.origins[:, 2, None])
-        return (np.where(beside, z, 0.0).max(1),)
-
-    (floor,) = _in_chunks(surface, frames, chunk_floor, fit.lo, fit.hi)
-    return floor
-
-
-def over_own_floor(surface: Surface, frames: Frames, fit: Fit, params: GraspSynthesisParams,
-                   on_table: float) -> tuple[Frames, Fit]:
-    """The frames whose pads come down over a floor of the part's own (a plate or flange beside what they
-    stop on) raised to keep the pose error above it as well as the table's clearance (the table is measured
-    directly; the part's floor is where the recognised pose puts it), and measured again there. A surface
-    at most ``on_table`` m high is the table."""
-    stops = np.isfinite(fit.lo)
-    floor = np.zeros(len(frames.origins))
-    floor[stops] = _floor_beside(surface, frames.take(stops), fit.take(stops), params)
-    least = np.where(floor > on_table, floor + params.lowest + params.pose_error, params.lowest)
-    low = frames.origins[:, 2] < least
-    if not low.any():
-        return frames, fit
-    origins = frames.origins.copy()
-    origins[low, 2] = least[low]
-    frames = Frames(origins, frames.closing)
-    return frames, measure(surface, frames, params, params.min_contact_share * params.pad_area)
 
 
 def perturbed_share(surface: Surface, frames: Frames, rng: np.random.Generator,
@@ -267,9 +227,3 @@ def _collides(surface: Surface, frames: Frames, lo: np.ndarray, hi: np.ndarray, 
     sweep = (av <= finger_w + m) & (w >= finger_low) & (w <= finger_top) & (au <= finger_out)
     hit |= sweep & ((u >= hi[f] + finger_in) | (u <= lo[f] - finger_in))
     return np.bincount(f[hit], minlength=len(frames.origins)) > 0
-
-
-def off_centre(frames: Frames, mesh: trimesh.Trimesh) -> np.ndarray:
-    """(F,) horizontal distance of each tool point from the centre of mass, in footprint half-diagonals."""
-    com = mesh.center_mass if mesh.is_watertight else mesh.convex_hull.center_mass
-    return np.hypot(*(frames.origins[:, :2] - com[:2]).T) / (0.5 * np.hypot(*mesh.extents[:2]))

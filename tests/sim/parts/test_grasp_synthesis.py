@@ -89,21 +89,7 @@ def test_a_block_on_a_thin_plate_is_grasped_with_the_pads_above_the_plate():
     assert grasps
     for g in grasps:
         assert abs(g.width - (0.02 if abs(g.closing[0]) > 0.99 else 0.03)) < 1e-3
-        # The plate is where the part's pose puts it: the pads keep the pose error over it besides the clearance.
-        pads_low = g.point[2] - PARAMS.pad_half_size[2]
-        assert pads_low >= 0.002 + PARAMS.table_clearance + PARAMS.pose_error - 1e-6
-
-
-def test_a_tray_is_grasped_across_its_walls_with_the_pose_error_over_its_floor():
-    floor = _box((0.1, 0.09, 0.0015))  # a 1.5 mm plate reaching past two walls 66 mm apart outside to outside
-    walls = [trimesh.creation.box((0.1, 0.004, 0.03)) for _ in range(2)]
-    for wall, y in zip(walls, (-0.031, 0.031)):
-        wall.apply_translation((0.0, y, 0.015))
-    grasps = _synthesised(trimesh.util.concatenate([floor, *walls]))
-    across = [g for g in grasps if abs(g.closing[1]) > 0.99]
-    assert across
-    for g in across:
-        assert g.point[2] - PARAMS.pad_half_size[2] >= 0.0015 + PARAMS.table_clearance + PARAMS.pose_error - 1e-6
+        assert g.point[2] - PARAMS.pad_half_size[2] >= 0.002 + PARAMS.clearance - 1e-6  # clear of the plate
 
 
 def test_a_part_too_wide_from_every_side_is_refused_naming_the_opening():
