@@ -96,7 +96,8 @@ def continued_share(view: SceneView, model_points: np.ndarray, model_normals: np
 def _around_measured(view: SceneView, points: np.ndarray, u: np.ndarray, v: np.ndarray, corner: tuple[int, int],
                      shape: tuple[int, int], reach: int, params: ContinuationParams) -> np.ndarray:
     """The window's pixels (``shape``, from ``corner`` u0, v0) within ``reach`` of where the visible model
-    ``points`` (at pixels ``u``, ``v``) are measured. Only there does the outline show: where something
+    ``points`` (at pixels ``u``, ``v``) are measured, and the 2 pixels by which the silhouette's closing
+    may reach past them. Only there does the outline show: where something
     nearer hides the model, what lies around its outline is that occluder, whose surface may well cross
     the planes of the model's faces (an arm across a chassis's walls)."""
     u0, v0 = corner

@@ -4,7 +4,6 @@ import numpy as np
 import trimesh
 
 from psorr.acceptance.continuation import continued_share
-from psorr.acceptance.params import AcceptParams
 from psorr.synthetic.workpiece_scenes import workpiece_scene
 from psorr.verification.scene_view import SceneView
 
@@ -26,14 +25,16 @@ def test_a_small_block_flush_with_a_large_blocks_side_is_continued_and_alone_is_
     flush = np.eye(4)
     flush[:3, 3] = (0.0, -0.05, 0.0)
     points, normals = _samples(small)
-    threshold = AcceptParams().max_continued  # the recognizer's bar (docs/decisions/0026-continuation-check.md)
+    # Twice the recognizer's bar (0.1, docs/decisions/0026-continuation-check.md): the flush block is clearly
+    # continued, and the lone one clearly not.
+    threshold = 0.2
     for seed in range(5):  # the layout's yaw turns the flush side towards the camera or away from it
         on_large = workpiece_scene(np.random.default_rng(seed), {"large": large}, ["large"])
         T = on_large.instances[0].T_camera_model @ flush
         share_on_large = continued_share(SceneView(on_large.cloud), points, normals, T)
         alone = workpiece_scene(np.random.default_rng(seed), {"small": small}, ["small"])
         share_alone = continued_share(SceneView(alone.cloud), points, normals, alone.instances[0].T_camera_model)
-        assert share_on_large > threshold and share_alone < threshold / 2, (seed, share_on_large, share_alone)
+        assert share_on_large > threshold and share_alone < threshold / 4, (seed, share_on_large, share_alone)
 
 
 def test_an_l_bracket_in_the_corner_of_a_block_and_the_table_is_continued_past_its_leg():
