@@ -78,3 +78,25 @@ def test_the_recognizer_drops_a_small_block_found_on_a_large_one_unless_the_chec
         scene = workpiece_scene(np.random.default_rng(seed), {"large": _block(0.24, 0.16, 0.06)}, ["large"])
         assert plain.recognize(scene.cloud, np.random.default_rng(0)).detections  # a false detection ...
         assert checked.recognize(scene.cloud, np.random.default_rng(0)).detections == ()  # ... that the check drops
+
+
+def test_beside_an_arm_only_the_outline_in_view_is_read(monkeypatch):
+    """Where the arm hides a chassis's outline, the ring there shows the arm, whose surface crosses the planes of
+    the chassis's walls. Read whole, the ring put the true pose over the bar in these layouts; read where the
+    chassis is measured, it stays well under it."""
+    from psorr import AcceptParams
+    from psorr.acceptance import continuation
+    from psorr.synthetic.catalog import load_catalog
+
+    chassis = load_catalog()["chassis"].load_mesh()
+    points, normals = _samples(chassis)
+    bar = AcceptParams().max_continued
+    for seed in (2, 19):  # layouts where the arm crosses the chassis's outline
+        scene = workpiece_scene(np.random.default_rng(seed), {"chassis": chassis}, ["chassis"], occluder=True)
+        view, T = SceneView(scene.cloud), scene.instances[0].T_camera_model
+        in_view = continued_share(view, points, normals, T)
+        with monkeypatch.context() as whole_ring:
+            whole_ring.setattr(continuation, "_around_measured", lambda view, points, u, v, corner, shape, *_:
+                               np.ones(shape, dtype=bool))
+            whole = continued_share(view, points, normals, T)
+        assert in_view < bar / 2 < bar < whole, (seed, in_view, whole)
