@@ -45,12 +45,13 @@ from psorr.library.orr_table import OrrTable
 from psorr.library.ppf import scene_oriented_points
 from psorr.recognize_params import Method, Recognition, RecognitionStats, RecognizeParams
 from psorr.segment.per_segment import coloured, segment_clouds
-from psorr.segment.pipeline import segment
+from psorr.segment.pipeline import SegmentParams, segment
 from psorr.sensing.resolution import thin_to_focal
 from psorr.types import Detection, PointCloud, PrimitiveKind
 from psorr.verification.scene_view import SceneView
 
 _NONE_KNOWN = CandidateSet()  # no earlier look's detections to follow
+_BY_COLOUR_AND_DISTANCE = SegmentParams(crease_noise=None)
 _TABLE_EXTENT = 1.2  # in diameters of the largest model: a primitive larger than this is the table
 
 
@@ -134,9 +135,10 @@ class Recognizer:
 
     def _per_segment(self, cloud: PointCloud, rng: np.random.Generator, start: float) -> Recognition:
         """Segment by colour and distance, recognise each segment alone, and give each detection its
-        segment's colour (psorr.segment)."""
+        segment's colour (psorr.segment). Segments are not split at creases: the models explain the
+        geometry themselves, and a concave part (a bracket, a channel) would fall into pieces."""
         detections, results = [], []
-        for seg, alone in segment_clouds(cloud, segment(cloud, rng=rng)):
+        for seg, alone in segment_clouds(cloud, segment(cloud, _BY_COLOUR_AND_DISTANCE, rng)):
             results.append(self._find(alone, rng))
             detections += [coloured(d, seg) for d in results[-1].detections]
         total = SearchResult(tuple(detections), *(sum(getattr(r, name) for r in results) for name in

@@ -3,7 +3,8 @@
 The table is the largest plane (psorr.geometry.support_plane); what stands above it, inside its
 outline, is voxelised, each voxel labelled with one of a few colour models by a graph cut
 (psorr.segment.colour_cut), and neighbouring voxels of one colour label joined into clusters
-(psorr.segment.clusters). A cloud without colours is clustered by distance alone.
+(psorr.segment.clusters). A cloud without colours is clustered by distance alone. Each cluster is
+then split where its surface folds inwards, as two objects touching do (psorr.segment.convexity).
 """
 
 from __future__ import annotations
@@ -25,6 +26,14 @@ from psorr.geometry.support_plane import support_plane
 from psorr.segment.clusters import absorb_small, conditional_clusters, merge_unless_distinct
 from psorr.segment.colour import colour_name, rgb_to_lab
 from psorr.segment.colour_cut import colour_cut, colour_models, weighted_lab
+from psorr.segment.convexity import (
+    concave_edges,
+    crease_voxels,
+    grow_into,
+    join_unless_concave,
+    median_bend,
+    voxel_normals,
+)
 from psorr.sensing.kinect_noise import KINECT_V1
 from psorr.types import PointCloud
 
@@ -46,12 +55,14 @@ class SegmentParams:
     smoothness: float = 1.0          # Potts weight of two neighbours of one colour
     min_voxels: int = 20             # a smaller cluster joins the neighbour it touches most
     even_spread: float = 10.0        # a cluster whose colours spread less is evenly coloured
+    crease_noise: float | None = 2.0  # a fold over this many times the normals' noise is a crease; None: no split
 
     def __post_init__(self):
         check.positive(self, "voxel_size", "tolerance_voxels", "height_sigmas", "merge_colour", "colour_sigma",
                        "lightness_weight", "even_spread")
         check.non_negative(self, "min_height", "smoothness")
         check.whole(self, "neighbours", "max_colours", "min_voxels")
+        check.positive(self, "crease_noise", optional=True)
 
     @classmethod
     def names(cls) -> list[str]:
@@ -141,10 +152,32 @@ def segment(cloud: PointCloud, params: SegmentParams | None = None,
     if n_models:
         clusters = merge_unless_distinct(clusters, colours, edge_i, edge_j, near, params.even_spread,
                                          params.merge_colour)
+    if params.crease_noise is not None:
+        clusters = _split_at_creases(centroids, clusters, edge_i, edge_j, near, params)
     labels[rows] = clusters[voxel_of]
     segments = _segments(cloud, labels)
     return Segmentation(labels, segments, plane,
                         SegmentStats((time.perf_counter() - start) * 1e3, n_models, len(centroids)))
+
+
+def _split_at_creases(centroids, clusters, edge_i, edge_j, near, params: SegmentParams) -> np.ndarray:
+    """Each cluster split where its surface folds inwards by over ``crease_noise`` times the median bend
+    between neighbours' normals (their noise: most neighbours lie on one smooth surface). Crease voxels
+    are set aside, the rest joined by their edges within the cluster, the crease voxels grown back into
+    the parts they touch, and two parts joined again unless most of the edges between them are concave."""
+    edge_i, edge_j = edge_i[near], edge_j[near]
+    normals = voxel_normals(centroids, params.neighbours)
+    bend = params.crease_noise * median_bend(normals, edge_i, edge_j) if len(edge_i) else 0.0
+    concave = concave_edges(centroids, normals, edge_i, edge_j, bend)
+    crease = crease_voxels(len(centroids), edge_i, edge_j, concave)
+    inside = (clusters[edge_i] == clusters[edge_j]) & (clusters[edge_i] >= 0)
+    seeds = inside & ~crease[edge_i] & ~crease[edge_j]
+    parts = np.where(crease, -1, conditional_clusters(len(centroids), edge_i, edge_j, seeds))
+    parts = grow_into(parts, edge_i[inside], edge_j[inside], crease)
+    alone = parts < 0
+    parts[alone] = parts.max(initial=-1) + 1 + np.arange(int(alone.sum()))
+    parts = absorb_small(parts, edge_i, edge_j, inside, params.min_voxels)
+    return join_unless_concave(parts, edge_i[inside], edge_j[inside], concave[inside])
 
 
 def _edges(centroids: np.ndarray, params: SegmentParams):
@@ -155,9 +188,10 @@ def _edges(centroids: np.ndarray, params: SegmentParams):
         return empty, empty, np.zeros(0, dtype=bool)
     _, idx = cKDTree(centroids).query(centroids, k=k + 1)
     i, j = np.repeat(np.arange(len(centroids)), k), idx[:, 1:].ravel()
-    pairs = np.unique(np.column_stack([np.minimum(i, j), np.maximum(i, j)]), axis=0)
-    length = np.linalg.norm(centroids[pairs[:, 0]] - centroids[pairs[:, 1]], axis=1)
-    return pairs[:, 0], pairs[:, 1], length < params.tolerance_voxels * params.voxel_size
+    keys = np.unique(np.minimum(i, j) * len(centroids) + np.maximum(i, j))  # one flat key a pair: sorts fast
+    first, second = keys // len(centroids), keys % len(centroids)
+    length = np.linalg.norm(centroids[first] - centroids[second], axis=1)
+    return first, second, length < params.tolerance_voxels * params.voxel_size
 
 
 def _segments(cloud: PointCloud, labels: np.ndarray) -> tuple[Segment, ...]:

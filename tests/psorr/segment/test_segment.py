@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from coloured_scenes import BLUE, RED, two_boxes
+from coloured_scenes import BLUE, RED, stacked_boxes, two_boxes
 
 from psorr import PointCloud
 from psorr.errors import InvalidInputError
@@ -28,6 +28,15 @@ def test_touching_boxes_of_one_colour_stay_one_segment_and_apart_they_are_two():
     cloud, truth = two_boxes((RED, RED), gap=0.03)
     apart = segment(cloud, rng=np.random.default_rng(0))
     assert [s.iou > 0.85 for s in object_segment_scores(truth, apart.labels)] == [True, True]
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_box_standing_on_another_of_its_colour_is_split_at_the_crease_between_them(seed):
+    cloud, truth = stacked_boxes((RED, RED), seed=seed)
+    split = segment(cloud, rng=np.random.default_rng(0))
+    assert [s.iou > 0.85 for s in object_segment_scores(truth, split.labels)] == [True, True]
+    whole = segment(cloud, SegmentParams(crease_noise=None), rng=np.random.default_rng(0))
+    assert len([s for s in whole.segments if s.n_points > 500]) == 1  # by colour and distance alone
 
 
 def test_the_table_and_nan_points_are_labelled_minus_one():
@@ -66,3 +75,5 @@ def test_bad_input_names_the_fix():
         segment(PointCloud(np.ones((10, 3))), params={"voxel_size": 0.01})
     with pytest.raises(InvalidInputError, match="voxel_size"):
         SegmentParams(voxel_size=0.0)
+    with pytest.raises(InvalidInputError, match="crease_noise"):
+        SegmentParams(crease_noise=-1.0)
