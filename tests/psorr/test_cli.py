@@ -183,6 +183,19 @@ def test_segment_writes_labels_json_and_picture(tmp_path):
     _labels_and_picture_written(tmp_path, scene.cloud, len(record["segments"]))
 
 
+def test_segment_splits_stacked_boxes_at_their_crease_unless_told_not_to(tmp_path):
+    from coloured_scenes import RED, stacked_boxes
+
+    cloud, _ = stacked_boxes((RED, RED))
+    write_cloud(tmp_path / "stacked.pcd", cloud)
+    counts = []
+    for extra in ([], ["--no-creases"]):
+        out = _run("segment", str(tmp_path / "stacked.pcd"), "--json", *extra)
+        assert out.returncode == 0, out.stderr
+        counts.append(len([s for s in json.loads(out.stdout)["segments"] if s["n_points"] > 500]))
+    assert counts == [2, 1]
+
+
 def test_recognize_with_colour_reports_each_detection_s_colour(tmp_path):
     from coloured_scenes import BLUE, RED, two_boxes
     from part_meshes import box
