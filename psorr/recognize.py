@@ -130,8 +130,7 @@ class Recognizer:
             return self._orr(view, rng)
         tally = self._new_tally(view)
         self._single_search(view, tally, known)
-        search = self._psorr if self.method is Method.PSORR else self._psg
-        return search(cloud, view, rng, tally)
+        return self._decomposed_search(cloud, view, rng, tally)
 
     def _per_segment(self, cloud: PointCloud, rng: np.random.Generator, start: float) -> Recognition:
         """Segment by colour and distance, recognise each segment alone, and give each detection its
@@ -185,7 +184,10 @@ class Recognizer:
         tally.add(found.hypotheses, found.verify_ms)
         return tally.result()
 
-    def _psorr(self, cloud: PointCloud, view: SceneView, rng: np.random.Generator, tally: SearchTally) -> SearchResult:
+    def _decomposed_search(self, cloud: PointCloud, view: SceneView, rng: np.random.Generator,
+                           tally: SearchTally) -> SearchResult:
+        """PSORR and PSG: what stands on the table decomposed and searched (_search), parts by their
+        outline, and what no detection explains decomposed finer and searched again."""
         p = self.params
         t0 = time.perf_counter()
         # Only what stands on the table is decomposed, with a band of table around it that keeps the
@@ -206,25 +208,6 @@ class Recognizer:
             self._single_search(view, tally, self._new_poses(self.outline.candidates(outlined, view), tally))
         if p.detail.fine_voxel is not None:
             self._second_look(cloud, cropped, view, margin, tally, rng)
-        return tally.result()
-
-    def _psg(self, cloud: PointCloud, view: SceneView, rng: np.random.Generator, tally: SearchTally) -> SearchResult:
-        """The scene decomposed as for PSORR, its shape graph's cliques matched to the models', conflicts
-        settled by QPBO, and the poses through the same acceptance."""
-        t0 = time.perf_counter()
-        margin = _TABLE_EXTENT / 2 * self.max_diameter
-        cropped = self._unexplained(crop_to_parts(cloud, view.support_plane, margin, self.params.support_crop),
-                                    view, tally, margin)
-        if cropped is None:
-            return tally.result()
-        scene = decompose_with_leftovers(cropped, self.scene_decompose, self.params.detail.leftover_voxel, rng)
-        tally.decomposition_ms += (time.perf_counter() - t0) * 1e3
-        if scene is None:
-            return tally.result()
-        found = self.psg.candidates(scene.graph, _TABLE_EXTENT * self.max_diameter)
-        self.acceptance(view, found.found.candidates, tally.claims)
-        tally.add(found.found.hypotheses, found.found.verify_ms)
-        tally.qpbo_nodes, tally.qpbo_unlabelled = found.nodes, found.unlabelled
         return tally.result()
 
     def _unexplained(self, cropped: PointCloud, view: SceneView, tally: SearchTally,
@@ -254,14 +237,17 @@ class Recognizer:
             self._search(cloud, view, fine, tally)
 
     def _search(self, cloud, view, scene, tally: SearchTally) -> None:
-        """Pair rounds, then single faces and long cylinders, over the primitives of the decomposition
-        ``scene``; what they find, and what it cost, is added to ``tally``."""
+        """Pair rounds (PSORR) or clique matching (PSG), then single faces and long cylinders, over the
+        primitives of the decomposition ``scene``; what they find, and what it cost, is added to ``tally``."""
         pts, nrm, used = scene_oriented_points(scene.primitives, _TABLE_EXTENT * self.max_diameter)
         prims = [scene.primitives[k] for k in used]
         members = [cloud.points[scene.labels == k] for k in used]
         # Primitives no detection explains yet; those an earlier search's detections explain are out.
         open_ = np.array([not self.detected.explain(tally.detections, m) for m in members], dtype=bool)
-        for _ in range(self.params.pairs.pair_rounds):
+        if self.method is Method.PSG:  # the shape graph's cliques in place of the pair rounds
+            more = self._cliques(view, scene, tally)
+            open_ &= np.array([not self.detected.explain(more, m) for m in members], dtype=bool)
+        for _ in range(self.params.pairs.pair_rounds if self.method is Method.PSORR else 0):
             # In clutter, pairs across other parts fill a model's hypothesis quota; once those parts are
             # explained, their primitives leave the pairing and a part with few votes gets its turn.
             keep = np.flatnonzero(open_)
@@ -289,6 +275,14 @@ class Recognizer:
             m == c.model and same_pose(self.library.models[m].points[::50], c.T_cloud_model, T,
                                        0.1 * self.library.models[m].diameter) for m, T in standing))
         return replace(found, candidates=new)
+
+    def _cliques(self, view, scene, tally: SearchTally) -> list:
+        """PSG: the scene graph's cliques matched, settled by QPBO and accepted; the new detections."""
+        found = self.psg.candidates(scene.graph, _TABLE_EXTENT * self.max_diameter)
+        tally.add(found.found.hypotheses, found.found.verify_ms)
+        tally.qpbo_nodes += found.nodes
+        tally.qpbo_unlabelled += found.unlabelled
+        return self.acceptance(view, found.found.candidates, tally.claims)
 
     def _single_search(self, view, tally: SearchTally, found, beyond=None) -> None:
         """The candidates ``found`` from single primitives go through acceptance (poses from one cylinder

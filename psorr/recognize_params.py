@@ -23,12 +23,12 @@ from psorr.types import Detection, Method
 class RecognizeParams:
     """Settings of recognition, one object per stage (distances in metres):
 
-    - ``decompose``: the scene's decomposition into planes and cylinders (PSORR);
-    - ``support_crop``: what of the supporting plane is decomposed (PSORR);
-    - ``detail``: the finer passes, over the decomposition's leftovers and what stands unexplained (PSORR);
+    - ``decompose``: the scene's decomposition into planes and cylinders (PSORR and PSG);
+    - ``support_crop``: what of the supporting plane is decomposed (PSORR and PSG);
+    - ``detail``: the finer passes, over the decomposition's leftovers and what stands unexplained (PSORR and PSG);
     - ``pairs``: pose hypotheses from primitive pairs, screened by box verification (PSORR);
-    - ``single_plane``, ``single_cylinder``: poses from one face or one long cylinder (PSORR);
-    - ``outline``: poses of parts resting on the table, searched over the patches they raise (PSORR; on by default);
+    - ``single_plane``, ``single_cylinder``: poses from one face or one long cylinder (PSORR and PSG);
+    - ``outline``: poses of parts resting on the table, from the patches they raise (PSORR and PSG; on by default);
     - ``psg``: PSG matching's cliques and QPBO (``method="psg"``);
     - ``orr``: the ORR baseline's random point pairs;
     - ``acceptance``: ICP, the point check's bars, and settling detections by the pixels they explain.

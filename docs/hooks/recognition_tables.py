@@ -156,8 +156,8 @@ def verify_compiled_detail() -> str:
 
 # ---- against peers (benchmarks/peers.py) -----------------------------------------------------------------------
 
-PEER_NAMES = {"psorr": "psorr", "orr": "orr (ours)", "fpfh": "Open3D FPFH + RANSAC + ICP",
-              "opencv_ppf": "OpenCV PPF3DDetector + ICP"}
+PEER_NAMES = {"psorr": "psorr", "psg": "psg (ours)", "orr": "orr (ours)",
+              "fpfh": "Open3D FPFH + RANSAC + ICP", "opencv_ppf": "OpenCV PPF3DDetector + ICP"}
 
 
 def peers() -> str:
@@ -238,7 +238,7 @@ def psg() -> str:
         a, b = r["psorr"], r["psg"]
         rows.append([r["model"], str(r["planes"]), str(r["cylinders"]), f"{a['found']}/{r['seeds']}",
                      f"{statistics.median(a['ms']):.0f}", f"{b['found']}/{r['seeds']}", str(b["false"]),
-                     f"{statistics.median(b['ms']):.0f}"])
+                     f"{statistics.median(b['ms']):.0f}", f"{r['cliques']['found']}/{r['seeds']}"])
     verdicts = "\n".join(f"- {v}" for v in data["verdicts"])
-    return table(["model", "planes", "cylinders", "PSORR found", "PSORR ms", "PSG found", "PSG false", "PSG ms"],
-                 rows, "lrrrrrrr") + "\n\n" + verdicts
+    return table(["model", "planes", "cylinders", "PSORR found", "PSORR ms", "PSG found", "PSG false", "PSG ms",
+                  "cliques alone found"], rows, "lrrrrrrrr") + "\n\n" + verdicts

@@ -64,9 +64,10 @@ class CornerIndex:
         self.normals, self.points = np.concatenate(normals), np.concatenate(points)
         self.tree = cKDTree(self.features) if len(self.features) else None
 
-    def match(self, corners: list[Clique], prims, angle_tolerance: float) -> CornerMatches:
+    def match(self, corners: list[Clique], prims, angle_tolerance: float, allowed=None) -> CornerMatches:
         """The poses of every model corner whose angles lie within ``angle_tolerance`` degrees of a scene
-        corner's, and whose turned normals do too (a mirrored order fits no rotation)."""
+        corner's, and whose turned normals do too (a mirrored order fits no rotation). ``allowed`` (scene
+        vertices (K, 3), owners (K,), model vertices (K, 3)) -> (K,) bool drops matches first."""
         empty = CornerMatches(np.zeros((0, 4, 4)), np.zeros(0, dtype=np.int64), np.zeros((0, 3), dtype=np.int64),
                               np.zeros((0, 3), dtype=np.int64))
         if not corners or self.tree is None:
@@ -75,6 +76,9 @@ class CornerIndex:
         hits = self.tree.query_ball_point(np.array([c.feature for c in corners]), angle_tolerance, p=np.inf)
         q = np.repeat(np.arange(len(corners)), [len(h) for h in hits])
         m = np.concatenate([np.asarray(h, dtype=np.int64) for h in hits]) if len(q) else np.zeros(0, dtype=np.int64)
+        if allowed is not None and len(q):
+            keep = allowed(scene_rows[q], self.owners[m], self.vertices[m])
+            q, m = q[keep], m[keep]
         if len(q) == 0:
             return empty
         scene_normals, scene_points = _corner_arrays(prims, scene_rows)

@@ -47,8 +47,15 @@ def densest_poses(poses: np.ndarray, models: np.ndarray, voters: np.ndarray, cen
     neither of its cells gave a pose already, so each cluster yields one hypothesis.
     Returns the chosen poses and their models.
     """
+    best = densest(poses, models, voters, centres, cell, limit)
+    return poses[best], models[best]
+
+
+def densest(poses: np.ndarray, models: np.ndarray, voters: np.ndarray, centres: np.ndarray, cell: float,
+            limit: int) -> np.ndarray:
+    """The indices (into poses (K, 4, 4)) that densest_poses chooses."""
     if len(poses) == 0:
-        return poses, models
+        return np.zeros(0, dtype=np.int64)
     coords = _coordinates(poses, centres[models], cell)
     cells, votes = [], []
     voters = np.asarray(voters, dtype=np.int64)
@@ -78,8 +85,7 @@ def densest_poses(poses: np.ndarray, models: np.ndarray, voters: np.ndarray, cen
             if len(picked) == quota:
                 break
         chosen.append(np.array(picked, dtype=np.int64))
-    best = np.concatenate(chosen)
-    return poses[best], models[best]
+    return np.concatenate(chosen)
 
 
 def share_out(order, models, limit):

@@ -21,9 +21,10 @@ from psorr.checks import params as check
 from psorr.hypotheses.candidates import CandidateSet
 from psorr.hypotheses.cliques import Clique, CliqueKind, cylinder_match, cylinder_poses, graph_cliques
 from psorr.hypotheses.corners import CornerIndex
+from psorr.hypotheses.edges import EdgeIndex, EdgeSet
 from psorr.hypotheses.pairs import PairParams
-from psorr.hypotheses.pose_clusters import share_out
-from psorr.hypotheses.primitive_match import RADIUS_TOLERANCE
+from psorr.hypotheses.pose_clusters import densest, share_out
+from psorr.hypotheses.primitive_match import RADIUS_TOLERANCE, PrimitiveSizes
 from psorr.hypotheses.qpbo import solve_qpbo
 from psorr.types import Primitive, PrimitiveKind, PrimitiveShapeGraph
 from psorr.verification.box_score import PrimitiveArrays, box_scores
@@ -45,12 +46,13 @@ class PsgParams:
     min_box_score: float = _PAIRS.min_box_score
     box_thickness: float = _PAIRS.box_thickness
     same_place: float = _PAIRS.cluster_cell
+    max_hypotheses: int = _PAIRS.max_hypotheses
     top: int = _PAIRS.refine_top
 
     def __post_init__(self):
         check.positive(self, "angle_tolerance", "box_thickness", "same_place")
         check.within(self, "min_box_score")
-        check.whole(self, "top")
+        check.whole(self, "top", "max_hypotheses")
 
 
 @dataclass(frozen=True, eq=False)
@@ -77,9 +79,12 @@ class PsgMatcher:
         self.models = list(library.models)
         self.model_cliques = [graph_cliques(m.graph) for m in self.models]
         self.corners = CornerIndex(self.models, self.model_cliques)
+        self.edges = EdgeIndex(self.models)
+        self.sizes = PrimitiveSizes(self.models)
         self.model_primitives = [PrimitiveArrays.of(m.graph.primitives) for m in self.models]
         # Model surface in primitive samples (evenly spaced, so proportional to area).
         self.model_areas = np.array([a.weight.sum() for a in self.model_primitives])
+        self.model_centres = np.array([m.points.mean(axis=0) for m in self.models]).reshape(-1, 3)
 
     def candidates(self, graph: PrimitiveShapeGraph, max_extent: float) -> PsgCandidates:
         """Candidates from the cliques of the scene's shape ``graph`` among primitives no longer than
@@ -87,9 +92,15 @@ class PsgMatcher:
         found = self._hypotheses(graph, max_extent)
         start = time.perf_counter()
         prims = graph.primitives
-        scores = box_scores(self.model_primitives, found.poses, PrimitiveArrays.of(prims), self.params.box_thickness,
-                            found.models) if len(found.poses) else np.zeros(0)
-        good = np.flatnonzero(scores >= self.params.min_box_score)
+        # As PSORR's pair votes: the poses most scene cliques agree on, an equal share per model.
+        voters = _voters(found.nodes)
+        pick = densest(found.poses, found.models, voters, self.model_centres, self.params.same_place,
+                       self.params.max_hypotheses)
+        scores = np.zeros(len(found.poses))
+        if len(pick):
+            scores[pick] = box_scores(self.model_primitives, found.poses[pick], PrimitiveArrays.of(prims),
+                                      self.params.box_thickness, found.models[pick])
+        good = np.flatnonzero(scores >= max(self.params.min_box_score, 1e-12))
         # A node earns the scene surface its hypothesis explains, not the share of its model: a small
         # model posed inside a large one covers more of itself than the large one, seen in part, does.
         explained = scores * self.model_areas[found.models] if len(found.models) else scores
@@ -106,11 +117,16 @@ class PsgMatcher:
         prims = graph.primitives
         small = {k for k, p in enumerate(prims) if float(np.max(p.box.extent)) <= max_extent}
         scene_cliques = [c for c in graph_cliques(graph) if set(c.vertices) <= small | {table}]
+        fits = self._sizes_fit(prims, table)
         corners = self.corners.match([c for c in scene_cliques if c.kind is CliqueKind.PLANES], prims,
-                                     self.params.angle_tolerance)
-        poses, models = list(corners.poses), corners.owners.tolist()
-        nodes = [tuple(zip(s.tolist(), [o] * 3, m.tolist()))
-                 for s, o, m in zip(corners.scene_vertices, models, corners.model_vertices)]
+                                     self.params.angle_tolerance, fits)
+        edges = self.edges.match(EdgeSet.of(graph, small | {table}), self.params.angle_tolerance, fits)
+        poses, models, nodes = [], [], []
+        for found in (corners, edges):
+            poses += list(found.poses)
+            models += found.owners.tolist()
+            nodes += [tuple(zip(s.tolist(), [o] * len(s), m.tolist())) for s, o, m in
+                      zip(found.scene_vertices, found.owners, found.model_vertices)]
         for scene in (c for c in scene_cliques if c.kind is CliqueKind.PLANE_CYLINDER):
             for index, cliques in enumerate(self.model_cliques):
                 for model in cliques:
@@ -121,6 +137,20 @@ class PsgMatcher:
                             models.append(index)
                             nodes.append(tuple((s, index, m) for s, m in zip(scene.vertices, model.vertices)))
         return _Hypotheses(np.array(poses).reshape(-1, 4, 4), np.array(models, dtype=np.int64), nodes)
+
+    def _sizes_fit(self, prims, table: int):
+        """A test of matched cliques (scene vertices (K, v), owners (K,), model vertices (K, v)) -> (K,) bool:
+        is each scene face no larger than its model face (psorr.hypotheses.primitive_match)? The table
+        stands for the face a part rests on, of any size."""
+        compatible = self.sizes.compatible(prims)
+        if table >= 0:
+            compatible[table] = True
+
+        def fits(scene_vertices, owners, model_vertices):
+            rows = self.sizes.offsets[owners][:, None] + model_vertices
+            return compatible[scene_vertices, rows].all(axis=1)
+
+        return fits
 
     def _poses(self, scene: Clique, model: Clique, prims, index: int) -> list[np.ndarray]:
         """The plane-and-cylinder clique's poses whose turned model normal and axis land within the
@@ -148,6 +178,12 @@ def _table_turned_over(graph: PrimitiveShapeGraph, max_extent: float) -> tuple[P
     flipped = tuple(-v for v in prims[table].params)
     prims[table] = replace(prims[table], params=flipped)
     return PrimitiveShapeGraph(tuple(prims), graph.edges), table
+
+
+def _voters(nodes: list[tuple]) -> np.ndarray:
+    """(H,) one id per scene clique: the set of scene primitives a hypothesis's nodes name."""
+    ids: dict[tuple, int] = {}
+    return np.array([ids.setdefault(tuple(sorted({n[0] for n in h})), len(ids)) for h in nodes], dtype=np.int64)
 
 
 def _distinct(order: np.ndarray, poses: np.ndarray, models: np.ndarray, params: PsgParams) -> list[int]:

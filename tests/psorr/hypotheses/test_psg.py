@@ -7,10 +7,11 @@ import pytest
 
 from psorr.hypotheses.cliques import CliqueKind, cylinder_match, cylinder_poses, graph_cliques
 from psorr.hypotheses.corners import CornerIndex
+from psorr.hypotheses.edges import EdgeIndex, EdgeSet
 from psorr.recognize import Recognizer
 from psorr.synthetic.catalog import load_catalog, symmetric_add
 from psorr.synthetic.workpiece_scenes import workpiece_scene
-from psorr.types import PrimitiveKind, PrimitiveShapeGraph
+from psorr.types import OrientedBox, PrimitiveKind, PrimitiveShapeGraph
 
 
 def _moved(graph: PrimitiveShapeGraph, T: np.ndarray) -> PrimitiveShapeGraph:
@@ -23,7 +24,8 @@ def _moved(graph: PrimitiveShapeGraph, T: np.ndarray) -> PrimitiveShapeGraph:
             params = (*n, p.offset - n @ t)
         else:
             params = (*(R @ p.axis_point + t), *(R @ p.axis), p.radius)
-        prims.append(replace(p, params=tuple(float(v) for v in params)))
+        box = OrientedBox(R @ p.box.center + t, R @ p.box.rotation, p.box.extent)
+        prims.append(replace(p, params=tuple(float(v) for v in params), centroid=R @ p.centroid + t, box=box))
     return PrimitiveShapeGraph(tuple(prims), graph.edges)
 
 
@@ -112,3 +114,23 @@ def test_the_corner_index_finds_the_motion_of_a_moved_model(library):
     same = own & (found.scene_vertices == found.model_vertices).all(axis=1)
     assert same.sum() == len(corners)
     assert np.allclose(found.poses[same], T, atol=1e-6)
+
+
+@pytest.mark.parametrize("part", ["bracket", "u_channel"])
+def test_the_edge_index_finds_the_motion_of_a_moved_model_from_two_faces(library, part):
+    # Parts seen from above often show two faces and no third that spans space with them; two
+    # adjacent faces that are not parallel fix the pose, the faces' middle its place along their line.
+    models = list(library.models)
+    index = EdgeIndex(models)
+    own_index = [m.name for m in models].index(part)
+    T = _random_motion(np.random.default_rng(11))
+    moved = _moved(library.model(part).graph, T)
+    scene = EdgeSet.of(moved)
+    assert len(scene) > 0 and np.allclose(scene.angle, EdgeSet.of(library.model(part).graph).angle)
+    found = index.match(scene, 1.0)
+    same = (found.owners == own_index) & (found.scene_vertices == found.model_vertices).all(axis=1)
+    assert same.sum() == len(scene)
+    assert np.allclose(found.poses[same], T, atol=1e-6)
+    # Matches that break a size rule are dropped before any pose is made.
+    nothing = index.match(scene, 1.0, allowed=lambda s, o, m: np.zeros(len(s), dtype=bool))
+    assert len(nothing.poses) == 0
