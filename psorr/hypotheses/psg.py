@@ -36,7 +36,8 @@ _CONFLICT = 2.0  # more than any reward a node can earn (box scores are at most 
 @dataclass(frozen=True)
 class PsgParams:
     """``angle_tolerance`` (degrees) between a scene clique's normal-to-normal (or normal-to-axis)
-    angles and a model clique's; the radius as in pair matching. Poses scoring at least
+    angles and a model clique's; the radius as in pair matching. The ``max_hypotheses`` poses that most
+    scene cliques agree on (PSORR's vote, on a ``same_place`` grid) are box-scored; those scoring at least
     ``min_box_score`` (with boxes thickened to ``box_thickness`` metres) take part in QPBO; of those it
     keeps, one of each group within ``same_place`` metres (PSORR's vote cell) and the angle tolerance,
     the ``top`` shared out across models, go on to acceptance."""
