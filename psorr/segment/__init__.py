@@ -1,5 +1,6 @@
 """Segmentation of a table-top cloud into objects by colour and distance (section 2.3 of the paper):
-a graph cut over colour models in CIELAB, then conditional Euclidean clustering."""
+a graph cut over colour models in CIELAB, then conditional Euclidean clustering, then a split where a
+segment's surface folds inwards, as objects that touch do (psorr.segment.convexity)."""
 
 from psorr.segment.colour import PALETTE, colour_name, rgb_to_lab
 from psorr.segment.pipeline import Segment, Segmentation, SegmentParams, SegmentStats, segment
