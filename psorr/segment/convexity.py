@@ -6,20 +6,8 @@ join a cluster afterwards."""
 from __future__ import annotations
 
 import numpy as np
-import open3d as o3d
 
-from psorr.geometry.open3d_threads import single_threaded
 from psorr.segment.clusters import by_size, conditional_clusters
-
-
-def voxel_normals(centroids: np.ndarray, neighbours: int) -> np.ndarray:
-    """(N, 3) unit normals of the voxel centroids (N, 3) from their ``neighbours`` nearest, each
-    pointing towards the sensor at the origin."""
-    cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(centroids))
-    with single_threaded():
-        cloud.estimate_normals(o3d.geometry.KDTreeSearchParamKNN(max(3, neighbours)))
-    normals = np.asarray(cloud.normals)
-    return np.where((np.sum(normals * centroids, axis=1) > 0)[:, None], -normals, normals)
 
 
 def median_bend(normals: np.ndarray, edge_i: np.ndarray, edge_j: np.ndarray) -> float:
@@ -53,9 +41,8 @@ def grow_into(clusters: np.ndarray, edge_i: np.ndarray, edge_j: np.ndarray, open
     cluster most of its already labelled neighbours (edges (E,), (E,)) hold. A voxel no ring reaches
     keeps -1."""
     labels = np.where(open_, -1, clusters)
-    ends = np.r_[edge_i, edge_j], np.r_[edge_j, edge_i]
+    source, target = np.r_[edge_i, edge_j], np.r_[edge_j, edge_i]
     while True:
-        source, target = ends[0], ends[1]
         take = (labels[target] < 0) & (labels[source] >= 0)
         if not take.any():
             return labels

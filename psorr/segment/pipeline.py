@@ -19,7 +19,7 @@ from scipy.spatial import Delaunay, cKDTree
 from psorr.checks import params as check
 from psorr.checks.arrays import random_generator
 from psorr.checks.clouds import require_sensor_metres
-from psorr.decomposition.preprocess import voxel_downsample
+from psorr.decomposition.preprocess import neighbourhood_normals, voxel_downsample
 from psorr.decomposition.support_crop import along_plane
 from psorr.errors import InvalidInputError
 from psorr.geometry.support_plane import support_plane
@@ -32,7 +32,6 @@ from psorr.segment.convexity import (
     grow_into,
     join_unless_concave,
     median_bend,
-    voxel_normals,
 )
 from psorr.sensing.kinect_noise import KINECT_V1
 from psorr.types import PointCloud
@@ -137,7 +136,7 @@ def segment(cloud: PointCloud, params: SegmentParams | None = None,
     if len(rows) == 0:
         return Segmentation(labels, (), plane, SegmentStats((time.perf_counter() - start) * 1e3, 0, 0))
     centroids, voxel_of = voxel_downsample(cloud.points[rows], params.voxel_size)
-    edge_i, edge_j, near = _edges(centroids, params)
+    edge_i, edge_j, near, neighbours = _edges(centroids, params)
     n_models, same = 0, np.ones(len(edge_i), dtype=bool)
     if cloud.colors is not None and np.isfinite(cloud.colors[rows]).all():
         counts = np.bincount(voxel_of, minlength=len(centroids))[:, None]
@@ -153,20 +152,21 @@ def segment(cloud: PointCloud, params: SegmentParams | None = None,
         clusters = merge_unless_distinct(clusters, colours, edge_i, edge_j, near, params.even_spread,
                                          params.merge_colour)
     if params.crease_noise is not None:
-        clusters = _split_at_creases(centroids, clusters, edge_i, edge_j, near, params)
+        clusters = _split_at_creases(centroids, neighbours, clusters, edge_i, edge_j, near, params)
     labels[rows] = clusters[voxel_of]
     segments = _segments(cloud, labels)
     return Segmentation(labels, segments, plane,
                         SegmentStats((time.perf_counter() - start) * 1e3, n_models, len(centroids)))
 
 
-def _split_at_creases(centroids, clusters, edge_i, edge_j, near, params: SegmentParams) -> np.ndarray:
+def _split_at_creases(centroids, neighbours, clusters, edge_i, edge_j, near, params: SegmentParams) -> np.ndarray:
     """Each cluster split where its surface folds inwards by over ``crease_noise`` times the median bend
     between neighbours' normals (their noise: most neighbours lie on one smooth surface). Crease voxels
     are set aside, the rest joined by their edges within the cluster, the crease voxels grown back into
     the parts they touch, and two parts joined again unless most of the edges between them are concave."""
     edge_i, edge_j = edge_i[near], edge_j[near]
-    normals = voxel_normals(centroids, params.neighbours)
+    # PCA normals over each voxel and its nearest (``neighbours`` points in all), facing the sensor.
+    normals, _ = neighbourhood_normals(centroids, neighbours[:, :params.neighbours - 1])
     bend = params.crease_noise * median_bend(normals, edge_i, edge_j) if len(edge_i) else 0.0
     concave = concave_edges(centroids, normals, edge_i, edge_j, bend)
     crease = crease_voxels(len(centroids), edge_i, edge_j, concave)
@@ -181,17 +181,18 @@ def _split_at_creases(centroids, clusters, edge_i, edge_j, near, params: Segment
 
 
 def _edges(centroids: np.ndarray, params: SegmentParams):
-    """Undirected neighbour pairs (i, j) of the voxels, each once, and which lie within the tolerance."""
+    """Undirected neighbour pairs (i, j) of the voxels, each once, which lie within the tolerance, and
+    each voxel's nearest others (N, k)."""
     k = min(params.neighbours, len(centroids) - 1)
     if k < 1:
         empty = np.zeros(0, dtype=np.int64)
-        return empty, empty, np.zeros(0, dtype=bool)
+        return empty, empty, np.zeros(0, dtype=bool), np.zeros((len(centroids), 0), dtype=np.int64)
     _, idx = cKDTree(centroids).query(centroids, k=k + 1)
     i, j = np.repeat(np.arange(len(centroids)), k), idx[:, 1:].ravel()
     keys = np.unique(np.minimum(i, j) * len(centroids) + np.maximum(i, j))  # one flat key a pair: sorts fast
     first, second = keys // len(centroids), keys % len(centroids)
     length = np.linalg.norm(centroids[first] - centroids[second], axis=1)
-    return first, second, length < params.tolerance_voxels * params.voxel_size
+    return first, second, length < params.tolerance_voxels * params.voxel_size, idx[:, 1:]
 
 
 def _segments(cloud: PointCloud, labels: np.ndarray) -> tuple[Segment, ...]:
