@@ -247,16 +247,8 @@ class Recognizer:
         if self.method is Method.PSG:  # the shape graph's cliques in place of the pair rounds
             more = self._cliques(view, scene, tally)
             open_ &= np.array([not self.detected.explain(more, m) for m in members], dtype=bool)
-        for _ in range(self.params.pairs.pair_rounds if self.method is Method.PSORR else 0):
-            # In clutter, pairs across other parts fill a model's hypothesis quota; once those parts are
-            # explained, their primitives leave the pairing and a part with few votes gets its turn.
-            keep = np.flatnonzero(open_)
-            found = self.pairs(pts[keep], nrm[keep], [prims[k] for k in keep])
-            more = self.acceptance(view, found.candidates, tally.claims)
-            tally.add(found.hypotheses, found.verify_ms)
-            open_ &= np.array([not self.detected.explain(more, m) for m in members], dtype=bool)
-            if not more or open_.sum() < 2:
-                break
+        else:
+            open_ = self._pair_rounds(view, pts, nrm, prims, members, open_, tally)
         # A part showing one face, or one long cylinder, gives no pair; matched by size, it still gives
         # poses. Only primitives no detection explains are tried (a cylinder: nor what the faces' detections
         # explain), so these few poses do not crowd out the pairs'.
@@ -275,6 +267,20 @@ class Recognizer:
             m == c.model and same_pose(self.library.models[m].points[::50], c.T_cloud_model, T,
                                        0.1 * self.library.models[m].diameter) for m, T in standing))
         return replace(found, candidates=new)
+
+    def _pair_rounds(self, view, pts, nrm, prims, members, open_, tally: SearchTally) -> np.ndarray:
+        """PSORR's pair rounds over the ``open_`` primitives; those still unexplained after them."""
+        for _ in range(self.params.pairs.pair_rounds):
+            # In clutter, pairs across other parts fill a model's hypothesis quota; once those parts are
+            # explained, their primitives leave the pairing and a part with few votes gets its turn.
+            keep = np.flatnonzero(open_)
+            found = self.pairs(pts[keep], nrm[keep], [prims[k] for k in keep])
+            more = self.acceptance(view, found.candidates, tally.claims)
+            tally.add(found.hypotheses, found.verify_ms)
+            open_ = open_ & np.array([not self.detected.explain(more, m) for m in members], dtype=bool)
+            if not more or open_.sum() < 2:
+                break
+        return open_
 
     def _cliques(self, view, scene, tally: SearchTally) -> list:
         """PSG: the scene graph's cliques matched, settled by QPBO and accepted; the new detections."""
