@@ -224,7 +224,7 @@ class PickPlaceEnv(gym.Env):
         for i, part in enumerate(self.parts):
             if self._estimates[part] is not None:
                 seen[i] = 1
-                T, scores[i], _ = self._estimates[part]
+                T, scores[i] = self._estimates[part].T_world_part, self._estimates[part].score
                 T = upright_equivalent(np.asarray(T, float), self.world.catalog[part])
                 q = np.zeros(4)
                 mujoco.mju_mat2Quat(q, np.ascontiguousarray(T[:3, :3]).ravel())

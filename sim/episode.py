@@ -10,6 +10,9 @@ simulator's true poses (and, with the human about, only checks whether someone i
 - otherwise pick the first remaining part, in task order, from the pose that look returned (of a part
   placed several times, the instance nearest the pose; see :meth:`Episode.estimates`).
 
+With ``WorldConfig.pick`` only the parts it names are picked, in its order; one named with a colour
+(``"red idler"``) is picked from a detection the look saw in that colour.
+
 A part is picked at most once. While the arm moves, the monitor stops it whenever someone
 reaches in (:mod:`sim.control.cell`). A look costs ``THINK_S`` of simulated time, during which the arm
 holds still, so the human keeps moving while the robot thinks.
@@ -33,6 +36,7 @@ from sim.skills.judging import PickResult, fixture_error, pose_error, resting_on
 from sim.skills.perception import MONITOR_OCCUPIED, Estimate, Look, Perception
 from sim.skills.pick import pick_and_place
 from sim.world import World
+from sim.world.config import pick_target
 
 __all__ = ["Episode", "EpisodeResult", "PickResult", "fixture_error", "pick_and_place", "pose_error", "run_episode"]
 
@@ -96,11 +100,13 @@ class Episode:
             human = ReachingHuman(rng, world.config.table_size, world.table_top, targets=targets,
                                   eye=world.T_world_camera[:3, 3])
         self.human = human
+        self.remaining, self.wanted_colour = _wanted(world)
         recognizing = poses is PoseSource.RECOGNIZED
         rgb = recorder is not None if rgb is None else rgb
-        self.perception = Perception(world, rng, recognize=recognizing, rgb=rgb) if recognizing or occluder else None
+        colours = any(self.wanted_colour.values())
+        self.perception = Perception(world, rng, recognize=recognizing, rgb=rgb, colours=colours) \
+            if recognizing or occluder else None
         self.cell = ArmCell(world, human=human, monitor=self.perception if occluder else None, recorder=recorder)
-        self.remaining = list(world.workpieces)
         self.picks: list[PickResult] = []
         self.looks = self.occupied_looks = 0
         self._start = time.perf_counter()
@@ -123,7 +129,8 @@ class Episode:
             occupied = watched and intruding >= MONITOR_OCCUPIED
             truth = {}
             for p in () if occupied else self.remaining:
-                truth.setdefault(self.world.part_types[p], []).append(Estimate(self.world.body_pose(p), 1.0))
+                truth.setdefault(self.world.part_types[p], []).append(
+                    Estimate(self.world.body_pose(p), 1.0, colour=_colour_name(self.world, p)))
             truth = {kind: tuple(estimates) for kind, estimates in truth.items()}
             look = Look(None, (), MappingProxyType(truth), intruding, occupied)
         self.looks += 1
@@ -140,7 +147,8 @@ class Episode:
     def estimates(self, look: Look) -> dict[str, Estimate]:
         """The remaining bodies' estimates in ``look``: each part's detections that score at least MIN_SCORE and
         stand upright on the table (parts rest there; anything else is a mistake), best first, each given to
-        the nearest remaining instance of its part that has none yet.
+        the nearest remaining instance of its part that has none yet and is wanted in the colour the look saw
+        it in (any colour, unless ``WorldConfig.pick`` names one).
 
         Which instance a pose is of is read from the simulator: it names the body the pick is graded against
         and whose fixture it fills (the instances' fixtures are alike). The robot moves on the pose alone."""
@@ -152,9 +160,11 @@ class Episode:
                     break
                 if self._already_placed(estimate.T_world_part):
                     continue
-                if estimate.score >= MIN_SCORE and resting_on_table(self.world, estimate.T_world_part, free[0]):
+                wanted = [p for p in free if self.wanted_colour[p] in (None, estimate.colour)]
+                if wanted and estimate.score >= MIN_SCORE and resting_on_table(self.world, estimate.T_world_part,
+                                                                               free[0]):
                     at = estimate.T_world_part[:3, 3]
-                    body = min(free, key=lambda p: np.linalg.norm(self.world.body_pose(p)[:3, 3] - at))
+                    body = min(wanted, key=lambda p: np.linalg.norm(self.world.body_pose(p)[:3, 3] - at))
                     out[body] = estimate
                     free.remove(body)
         return out
@@ -245,6 +255,32 @@ class Episode:
 
     def __exit__(self, *exc) -> None:
         self.close()
+
+
+def _wanted(world: World) -> tuple[list[str], dict[str, str | None]]:
+    """The bodies to pick, in order, and the colour each is wanted in (None: any), from ``WorldConfig.pick``
+    (every body in task order when it is empty). Which body a colour names is the simulator's truth, used
+    to grade the pick; the robot goes by the colour it sees."""
+    if not world.config.pick:
+        return list(world.workpieces), dict.fromkeys(world.workpieces)
+    bodies, colours = [], {}
+    for entry in world.config.pick:
+        colour, part = pick_target(entry, world.config.workpieces)
+        left = [b for b in world.bodies_of(part) if b not in colours]
+        match = [b for b in left if colour in (None, _colour_name(world, b))]
+        if not match:
+            seen = ", ".join(f"{b} ({_colour_name(world, b)})" for b in world.bodies_of(part))
+            raise SimInputError(f"pick {entry!r}: no {part}{' in ' + colour if colour else ''} is left to pick; "
+                                f"the table holds {seen}, and pick names each at most once")
+        bodies.append(match[0])
+        colours[match[0]] = colour
+    return bodies, colours
+
+
+def _colour_name(world: World, body: str) -> str:
+    from psorr.segment.colour import colour_name
+
+    return colour_name(world.catalog[body].color)
 
 
 def _not_picked(part: str, why: str) -> PickResult:

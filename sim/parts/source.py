@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -27,7 +27,10 @@ class MeshPart:
         units: the file's length unit, ``"m"`` or ``"mm"``.
         name: the part's name in the cell and in the recognizer's library (default: the file's stem).
         count: how many of it go on the table.
-        color: (3,) display RGB in [0, 1], or None for a grey chosen from the name.
+        color: its colour: (3,) RGB in [0, 1] or a name of ``psorr.segment.PALETTE`` (``"red"``), for every
+            instance, or a list of ``count`` of them, one per instance (two idlers, a red and a blue); None for
+            a grey chosen from the name. Read back as the first instance's RGB, and every instance's in
+            :attr:`instance_colors`.
         density: kg/m^3, for the mass and inertia.
         place: ``"fixture"``, ``"tote"``, or None for the task's default (a fixture for a part resting upright).
     """
@@ -39,6 +42,7 @@ class MeshPart:
     color: tuple[float, float, float] | None = None
     density: float = DEFAULT_DENSITY
     place: str | None = None
+    instance_colors: tuple[tuple[float, float, float], ...] | None = field(default=None, init=False)
 
     def __post_init__(self):
         object.__setattr__(self, "path", Path(self.path))
@@ -52,7 +56,9 @@ class MeshPart:
         if isinstance(self.count, bool) or not isinstance(self.count, int) or self.count < 1:
             raise SimInputError(f"count must be a whole number of at least 1, got {self.count!r}")
         if self.color is not None:
-            object.__setattr__(self, "color", _rgb(self.color))
+            colors = _instance_colors(self.color, self.count)
+            object.__setattr__(self, "color", colors[0])
+            object.__setattr__(self, "instance_colors", colors)
         if isinstance(self.density, bool) or not isinstance(self.density, (int, float)) \
                 or not math.isfinite(self.density) or self.density <= 0:
             raise SimInputError(f"density must be a positive number of kg/m^3, got {self.density!r}")
@@ -65,7 +71,24 @@ class MeshPart:
         return UNITS[self.units]
 
 
+def _instance_colors(value, count: int) -> tuple[tuple[float, float, float], ...]:
+    """One RGB per instance from a task's color: one colour for all, or a list of ``count`` colours."""
+    if isinstance(value, (list, tuple)) and value and all(isinstance(v, (str, list, tuple)) for v in value):
+        if len(value) != count:
+            raise SimInputError(f"color lists {len(value)} colours for count {count}: give one colour for every "
+                                f"instance, or a single colour for all, got {value!r}")
+        return tuple(_rgb(v) for v in value)
+    return (_rgb(value),) * count
+
+
 def _rgb(value) -> tuple[float, float, float]:
+    from psorr.segment.colour import PALETTE
+
+    if isinstance(value, str):
+        if value not in PALETTE:
+            raise SimInputError(f"color {value!r} is not a palette name: give one of {', '.join(PALETTE)}, or 3 "
+                                "numbers in [0, 1] (red, green, blue)")
+        return PALETTE[value]
     try:
         rgb = np.array(value, dtype=float)
     except (TypeError, ValueError):

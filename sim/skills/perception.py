@@ -49,11 +49,14 @@ class Estimate(NamedTuple):
         score: the detection's score, in [0, 1].
         alternatives: its near-symmetric twins (4, 4, world) that the look could not rule out
             (:attr:`psorr.types.Detection.alternatives`).
+        colour: the palette name of the colour the look saw it in (``psorr.segment.supported_colour``), or None
+            when the look did not name colours.
     """
 
     T_world_part: np.ndarray
     score: float
     alternatives: tuple = ()
+    colour: str | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -83,6 +86,8 @@ class Perception:
         rng: the sensor noise's randomness (the monitor draws its own from it).
         recognize: run PSORR on each look (False: looks only check occupancy).
         rgb: render the colour image with each look (for a recorder or a viewer; PSORR needs depth only).
+        colours: name each detection's colour from the points that support it in the look's colour image (to
+            pick a part by its colour); renders the colour image whatever ``rgb`` says.
 
     Each look after the first gives PSORR the last recognised look's detections to follow (the camera stands
     still): they are judged again where they were, and only what they no longer explain is searched, so a
@@ -91,8 +96,9 @@ class Perception:
     Call :meth:`close` (or use it as a context manager) to free the renderers.
     """
 
-    def __init__(self, world: World, rng: np.random.Generator, recognize: bool = True, rgb: bool = True):
-        self.world, self.rng, self.rgb = world, rng, rgb
+    def __init__(self, world: World, rng: np.random.Generator, recognize: bool = True, rgb: bool = True,
+                 colours: bool = False):
+        self.world, self.rng, self.rgb, self.colours = world, rng, rgb or colours, colours
         self.camera = DepthCamera(world.model, world.camera_name)
         self._monitor = DepthBodyRenderer(world.model, MONITOR_CAMERA.height, MONITOR_CAMERA.width,
                                           world.model.camera(world.camera_name).id)
@@ -135,9 +141,18 @@ class Perception:
             for det in detections:
                 if det.model in self.world.part_types.values():
                     estimates.setdefault(det.model, []).append(
-                        Estimate(T @ det.T_cloud_model, det.score, tuple(T @ A for A in det.alternatives)))
+                        Estimate(T @ det.T_cloud_model, det.score, tuple(T @ A for A in det.alternatives),
+                                 self._colour(cloud, det)))
         estimates = {k: tuple(sorted(v, key=lambda e: -e.score)) for k, v in estimates.items()}
         return Look(frame, detections, MappingProxyType(estimates), intruding, bool(occupied))
+
+    def _colour(self, cloud: PointCloud, detection: Detection) -> str | None:
+        if not self.colours:
+            return None
+        from psorr.segment.support_colour import supported_colour
+
+        colour = supported_colour(cloud, detection, self._recognizer.library.model(detection.model))
+        return None if colour is None else colour.name
 
     def look_at_held(self, data: mujoco.MjData, part: str, T_world_part: np.ndarray) -> tuple[Detection, np.ndarray]:
         """Render the Kinect and refine the pose (4, 4, world) of ``part``, held up in the hand, from

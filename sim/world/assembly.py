@@ -20,6 +20,7 @@ poses the arm at time t. The home keyframe holds it at rest, out of the camera's
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from types import MappingProxyType
 
@@ -33,7 +34,15 @@ from sim.people.occluder import RADII, ReachSchedule, occluder_pose, segment_hal
 from sim.world.built import HOME_KEY, World, pose_matrix, quat_of
 from sim.world.config import WorldConfig
 from sim.world.layout import place_parts, yaw_matrix
-from sim.world.parts import cell_parts, drawn_rests, footprint_bounds, footprint_sides, instance_names, places
+from sim.world.parts import (
+    cell_parts,
+    drawn_rests,
+    footprint_bounds,
+    footprint_sides,
+    instance_colours,
+    instance_names,
+    places,
+)
 from sim.world.robot import ArmConfig, apply_arm_options, load_arm_spec
 from sim.world.tote import ToteLayout
 
@@ -113,15 +122,25 @@ def add_part_body(spec: mujoco.MjSpec, body_name: str, mesh, mass: float, pos, q
     return body
 
 
-def _add_workpiece(spec, body_name: str, part: CellPart, mesh, pos, quat) -> None:
-    """A free body ``body_name`` of ``part``: its visual mesh, collision hulls, mass and inertia."""
+def _add_workpiece(spec, body_name: str, part: CellPart, mesh, pos, quat, rgb=None) -> None:
+    """A free body ``body_name`` of ``part``: its visual mesh (in ``rgb``, its own colour, when given; else the
+    part's), collision hulls, mass and inertia."""
     name = part.name
+    material = f"{name}_material"
+    if rgb is not None:
+        material = f"{body_name}_material"
+        spec.add_material(name=material, rgba=[*rgb, 1.0], specular=0.3)
     body = add_part_body(spec, body_name, mesh, part.info.mass, pos, quat)
     body.add_geom(default=spec.find_default("visual"), name=f"{body_name}_visual", type=_GEOM.mjGEOM_MESH,
-                  meshname=name, material=f"{name}_material")
+                  meshname=name, material=material)
     for k in range(len(part.collision_files)):
         body.add_geom(default=spec.find_default("collision"), name=f"{body_name}_collision_{k}",
                       type=_GEOM.mjGEOM_MESH, meshname=f"{name}_collision_{k}")
+
+
+def _coloured(info, rgb):
+    """``info`` in the body's own colour ``rgb`` (unchanged for None)."""
+    return info if rgb is None else dataclasses.replace(info, color=np.array(rgb))
 
 
 def _fixture_walls(bounds, cfg: WorldConfig, clearance: float | None = None, wall=None):
@@ -203,12 +222,14 @@ def build_world(config: WorldConfig = WorldConfig(), rng: np.random.Generator | 
         _add_boxes(spec, body, "tote", _fixture_walls(tote.bounds(), cfg, 0.0, cfg.tote_wall), "fixture")
     for part in parts.values():
         _add_part_assets(spec, part)
+    colours = instance_colours(cfg)
     for name in bodies:
         x, y, yaw = spots[name]
         T = pose_matrix([x, y, cfg.table_height + cfg.drop_height], yaw_matrix(yaw))
         if name in rests:
             T = T @ rests[name]
-        _add_workpiece(spec, name, parts[types[name]], meshes[types[name]], T[:3, 3], quat_of(T[:3, :3]))
+        _add_workpiece(spec, name, parts[types[name]], meshes[types[name]], T[:3, 3], quat_of(T[:3, :3]),
+                       colours.get(name))
     schedule, occluder_geoms = None, ()
     if cfg.occluder:  # drawn last: the layout above does not depend on it
         data = mujoco.MjData(bare)
@@ -246,7 +267,7 @@ def build_world(config: WorldConfig = WorldConfig(), rng: np.random.Generator | 
     return World(
         config=cfg, spec=spec, model=model, data=data, arm=arm, workpieces=bodies,
         part_types=MappingProxyType(types),
-        catalog=MappingProxyType({b: parts[t].info for b, t in types.items()}),
+        catalog=MappingProxyType({b: _coloured(parts[t].info, colours.get(b)) for b, t in types.items()}),
         grasps=MappingProxyType({b: parts[t].grasps for b, t in types.items()}),
         T_world_workpieces=MappingProxyType(
             {n: frozen(pose_matrix(data.xpos[i], data.xmat[i].reshape(3, 3))) for n, i in ids.items()}

@@ -46,6 +46,9 @@ class WorldConfig:
         settle_time: simulated time the parts are left to settle before the home keyframe.
         intrinsics: the camera; MuJoCo needs fx == fy and a centred principal point.
         occluder: add the human arm (``sim/people/occluder.py``) and draw its reach schedule.
+        pick: the parts an episode picks, in this order: each a part's name, or a colour of
+            ``psorr.segment.PALETTE`` and a part's name (``"red idler"``: the instance the robot sees as red);
+            empty: every part, in task order. Parts not named stay on the table.
     """
 
     workpieces: tuple[str, ...] = ("u_channel", "chassis", "transformer", "flanged_hub")
@@ -68,6 +71,7 @@ class WorldConfig:
     settle_time: float = 0.5
     intrinsics: CameraIntrinsics = KINECT_V1_CAMERA
     occluder: bool = True
+    pick: tuple[str, ...] = ()
 
     def __post_init__(self):
         object.__setattr__(self, "workpieces", tuple(self.workpieces))
@@ -95,3 +99,19 @@ class WorldConfig:
         if not 0 <= self.reach[0] < self.reach[1] or min(self.gap, self.drop_height, self.settle_time) < 0:
             raise SimInputError("reach must be (min, max) with 0 <= min < max; gap, drop_height, settle_time >= 0")
         check_intrinsics(self.intrinsics)
+        object.__setattr__(self, "pick", tuple(self.pick))
+        for wanted in self.pick:
+            pick_target(wanted, self.workpieces)
+
+
+def pick_target(wanted, workpieces) -> tuple[str | None, str]:
+    """(colour or None, part) of an entry of :attr:`WorldConfig.pick`, such as ``"red idler"``."""
+    from psorr.segment.colour import PALETTE
+
+    words = wanted.split() if isinstance(wanted, str) else []
+    if len(words) not in (1, 2) or words[-1] not in workpieces:
+        raise SimInputError(f"pick {wanted!r}: name a part on the table ({', '.join(workpieces)}), optionally "
+                            "after its colour, as in 'red idler'")
+    if len(words) == 2 and words[0] not in PALETTE:
+        raise SimInputError(f"pick {wanted!r}: {words[0]!r} is not a colour; colours are {', '.join(PALETTE)}")
+    return (words[0] if len(words) == 2 else None), words[-1]

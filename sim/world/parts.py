@@ -71,6 +71,17 @@ def instance_names(cfg: WorldConfig) -> dict[str, str]:
     return bodies
 
 
+def instance_colours(cfg: WorldConfig) -> dict[str, tuple[float, float, float]]:
+    """Body name -> its own RGB, for the instances of a mesh part given one colour each (``color: [red,
+    blue]``); the bodies of other parts are absent and take their part's colour."""
+    bodies = {}
+    for part in cfg.mesh_parts:
+        if part.instance_colors is not None and len(set(part.instance_colors)) > 1:
+            names = [b for b, t in instance_names(cfg).items() if t == part.name]
+            bodies.update(zip(names, part.instance_colors))
+    return bodies
+
+
 def places(cfg: WorldConfig) -> dict[str, str]:
     """Body name -> where it is placed: ``"fixture"`` or ``"tote"`` (a mesh part's ``place``, else a fixture
     for a part resting upright and the tote for one resting any way)."""

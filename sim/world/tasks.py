@@ -14,6 +14,8 @@ A workpiece is a catalog part's name, or a mapping that names a mesh of the user
     resting: any                    # upright (default): each part on its largest stable face, placed in a
                                     # fixture; any: each in a seeded random stable rest, placed in the tote
     min_gap: 0.0                    # m between footprints (default 0.02); 0 lets parts touch
+    pick: [red idler]               # which parts to pick, in order, each by name and optionally by the colour
+                                    # the robot sees it in (default: every part, in task order)
 
 Every key is checked before the world is built, and a wrong one is named with its line.
 """
@@ -27,7 +29,7 @@ from sim.errors import SimInputError, TaskFileError
 from sim.parts.source import MeshPart
 from sim.world.config import RESTING, WorldConfig
 
-TASK_KEYS = ("workpieces", "camera_height", "camera_tilt_deg", "resting", "min_gap")
+TASK_KEYS = ("workpieces", "camera_height", "camera_tilt_deg", "resting", "min_gap", "pick")
 MESH_KEYS = ("mesh", "units", "name", "count", "color", "density", "place")
 _EXAMPLE = "see tasks/demo.yaml and tasks/printed_parts.yaml"
 
@@ -72,10 +74,13 @@ def load_task(path) -> Task:
     if resting not in RESTING:
         raise TaskFileError(path, f"line {spec.lines['resting']}: resting must be one of {', '.join(RESTING)}, "
                             f"got {resting!r}")
+    if "pick" in spec:
+        options["pick"] = _pick(path, spec)
     try:
         return Task(path, WorldConfig(workpieces=names, mesh_parts=meshes, resting=resting, **options))
     except SimInputError as exc:  # a value out of range, or a part listed twice: this file's fault
-        raise TaskFileError(path, str(exc)) from None
+        key = next((k for k in spec if str(exc).startswith(k)), None)
+        raise TaskFileError(path, str(exc) if key is None else f"line {spec.lines[key]}: {exc}") from None
 
 
 def _read(path: Path):
@@ -102,6 +107,16 @@ def _number(path: Path, spec: _Lined, key: str) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise TaskFileError(path, f"line {spec.lines[key]}: {key} must be a number, got {value!r}", _EXAMPLE)
     return float(value)
+
+
+def _pick(path: Path, spec: _Lined) -> tuple[str, ...]:
+    pick = spec["pick"]
+    if isinstance(pick, str):
+        pick = [pick]
+    if not isinstance(pick, list) or not pick or not all(isinstance(p, str) for p in pick):
+        raise TaskFileError(path, f"line {spec.lines['pick']}: pick must be a list of parts, each optionally after "
+                            f"its colour, as in [red idler, chassis]; got {spec['pick']!r}")
+    return tuple(pick)
 
 
 def _workpieces(path: Path, spec: _Lined) -> tuple[tuple[str, ...], tuple[MeshPart, ...]]:

@@ -5,7 +5,7 @@ import pytest
 import trimesh
 
 from sim.episode import run_episode
-from sim.errors import PartMeshError
+from sim.errors import PartMeshError, SimInputError
 from sim.parts.derive import cache_folder, derive_part, upright_mesh
 from sim.parts.source import MeshPart
 from sim.world import WorldConfig, build_world
@@ -99,3 +99,24 @@ def test_two_instances_lying_any_way_and_touching_go_to_the_tote_alike_for_a_see
     for body in world.workpieces:  # in the tote, as the simulator has it
         T_tote_part = np.linalg.inv(world.T_world_tote) @ world.body_pose(body)
         assert np.all(np.abs(T_tote_part[:2, 3]) < world.tote.half_inside)
+
+
+def test_of_two_instances_in_two_colours_the_robot_picks_the_one_named(part, cache):
+    twice = MeshPart(part.path, units="mm", count=2, color=["blue", "red"])
+    config = WorldConfig(workpieces=("stepped_block",), mesh_parts=(twice,), occluder=False,
+                         pick=("red stepped_block",))
+    world = build_world(config, np.random.default_rng(5))
+    assert tuple(world.catalog["stepped_block_2"].color) == (0.8, 0.1, 0.1)
+    blue_before = world.body_pose("stepped_block_1")
+    result = run_episode(world, np.random.default_rng(5), poses="recognized")
+    (pick,) = result.picks
+    assert pick.part == "stepped_block_2" and pick.grasped and pick.placed, pick.note
+    assert np.linalg.norm(world.body_pose("stepped_block_1")[:3, 3] - blue_before[:3, 3]) < 0.005
+
+
+def test_a_pick_of_a_colour_no_instance_has_is_refused(part, cache):
+    config = WorldConfig(workpieces=("stepped_block",), mesh_parts=(part,), occluder=False,
+                         pick=("green stepped_block",))
+    world = build_world(config, np.random.default_rng(5))
+    with pytest.raises(SimInputError, match=r"no stepped_block in green is left to pick.*stepped_block \(red\)"):
+        run_episode(world, np.random.default_rng(5), poses="oracle")

@@ -43,7 +43,11 @@ def test_a_name_replaces_the_file_stem(folder):
     ("workpieces:\n  - mesh: parts/block.stl\n    colour: [1, 0, 0]\n", 3, "unknown key 'colour'"),
     ("workpieces:\n  - mesh: parts/block.stl\n    units: inch\n", 3, "units must be one of m, mm"),
     ("workpieces:\n  - mesh: parts/block.stl\n    color: [1, 0]\n", 3, "color must be 3 numbers"),
-    ("workpieces:\n  - mesh: parts/block.stl\n    color: red\n", 3, "color must be 3 numbers"),
+    ("workpieces:\n  - mesh: parts/block.stl\n    color: crimson\n", 3, "'crimson' is not a palette name"),
+    ("workpieces:\n  - mesh: parts/block.stl\n    count: 2\n    color: [red]\n", 4, "1 colours for count 2"),
+    ("workpieces: [chassis]\npick: [gearbox]\n", 2, "pick 'gearbox': name a part on the table"),
+    ("workpieces: [chassis]\npick: [crimson chassis]\n", 2, "'crimson' is not a colour"),
+    ("workpieces: [chassis]\npick: 3\n", 2, "pick must be a list"),
     ("workpieces:\n  - mesh: parts/block.stl\n    count: 0\n", 3, "count must be a whole number"),
     ("workpieces:\n  - mesh: parts/block.stl\n    density: -1\n", 3, "density must be a positive number"),
     ("workpieces:\n  - mesh: parts/block.stl\n    place: shelf\n", 3, "place must be one of fixture, tote"),
@@ -61,6 +65,14 @@ def test_each_bad_key_is_named_with_its_line(folder, text, line, words):
     assert f"task.yaml: line {line}: " in message and words in message, message
 
 
+def test_instances_take_a_colour_each_and_pick_names_one_by_colour(folder):
+    task = _task(folder, "workpieces:\n  - mesh: parts/block.stl\n    count: 2\n    color: [red, [0.1, 0.2, 0.9]]\n"
+                         "  - chassis\npick: [red block, chassis]\n")
+    (part,) = task.world.mesh_parts
+    assert part.instance_colors == ((0.8, 0.1, 0.1), (0.1, 0.2, 0.9)) and part.color == (0.8, 0.1, 0.1)
+    assert task.world.pick == ("red block", "chassis")
+
+
 def test_the_error_lists_the_valid_keys(folder):
     with pytest.raises(TaskFileError, match=", ".join(TASK_KEYS)):
         _task(folder, "workpieces: [chassis]\ncamera: 3\n")
@@ -73,6 +85,13 @@ def test_a_negative_gap_and_a_part_twice_are_refused(folder):
         _task(folder, "workpieces: [chassis]\nmin_gap: -0.01\n")
     with pytest.raises(TaskFileError, match="each once"):
         _task(folder, "workpieces:\n  - mesh: parts/block.stl\n  - mesh: parts/block.stl\n")
+
+
+def test_the_shipped_colour_pick_task_reads():
+    from pathlib import Path
+
+    task = load_task(Path(__file__).resolve().parents[3] / "tasks" / "colour_pick.yaml")
+    assert task.world.pick == ("red hub",) and task.world.mesh_parts[0].count == 2
 
 
 def test_the_shipped_demo_task_still_reads():
