@@ -16,6 +16,7 @@ import json
 import numpy as np
 
 from sim.parts import tell
+from sim.parts.cache_files import write_whole
 from sim.parts.derive import CellPart, grasp_settings
 from sim.parts.grasp import Grasp
 
@@ -44,9 +45,8 @@ def with_synthesised_grasps(part: CellPart, progress=tell) -> CellPart:
         if progress is not None:
             progress(f"synthesising the grasps of {info.name} from {info.mesh_path} (once per mesh)")
         grasps, trials = _synthesised(part, np.random.default_rng(seed))
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(json.dumps({"grasp_params": settings, "grasps": [g.as_record() for g in grasps],
-                                    "grasp_trials": [dataclasses.asdict(t) for t in trials]}))
+        write_whole(path, json.dumps({"grasp_params": settings, "grasps": [g.as_record() for g in grasps],
+                                      "grasp_trials": [dataclasses.asdict(t) for t in trials]}))
     return dataclasses.replace(part, grasps=grasps)
 
 

@@ -23,6 +23,7 @@ from psorr.errors import PsorrError
 from psorr.synthetic.catalog import WorkpieceInfo
 from sim.errors import PartMeshError
 from sim.parts import tell
+from sim.parts.cache_files import write_whole
 from sim.parts.grasp import Grasp
 from sim.parts.source import MeshPart
 
@@ -148,7 +149,7 @@ def derive_part(part: MeshPart, progress=tell) -> CellPart:
     mesh = upright_mesh(part)
     folder.mkdir(parents=True, exist_ok=True)
     mesh_path = folder / f"{part.name}.stl"
-    mesh.export(mesh_path)
+    write_whole(mesh_path, mesh.export(file_type="stl"))
     hulls = _hulls(part, mesh_path, folder)
     grasps, trials = _grasps(part, mesh, hulls, np.random.default_rng(int(folder.name[:8], 16)))
     info = _info(part, mesh, mesh_path)
@@ -230,7 +231,7 @@ def _write_record(path: Path, info: WorkpieceInfo, volume: float, hulls, grasps,
         "grasp_trials": trials,
         "seconds": round(seconds, 2), "grasp_params": grasp_settings(),
     }
-    path.write_text(json.dumps(record))
+    write_whole(path, json.dumps(record))
 
 
 def grasp_settings() -> str:
