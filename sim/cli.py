@@ -11,6 +11,10 @@ the true ones (oracle), and judged on the simulator's truth. With the
 occluder on, a person reaches over the table now and then; the robot sees
 them in its camera, waits before looking again and stops while they reach.
 
+`plan PLAN.yaml` checks a process plan against its cell, plans it with a STRIPS planner (or takes the
+person's actions in it, once they reach the goal) and executes it, binding each symbolic object to a
+part the robot recognises; a failed action is repaired by planning again.
+
 `grasps TASK.yaml --out DIR` draws each part of a task as the cell builds it, with its grasps in each of
 its most probable rests (the upright part's alone for a part placed upright): one PNG a part.
 """
@@ -138,6 +142,25 @@ def _run(args) -> int:
     return 0
 
 
+def _plan(args) -> int:
+    from sim.plans import goal_places, load_plan, run_plan, write_pddl
+
+    plan = load_plan(args.plan)
+    if args.pddl:
+        for path in write_pddl(goal_places(plan), check_output(args.pddl, "--pddl")):
+            _log(f"wrote {path}")
+    result = run_plan(plan, np.random.default_rng(args.seed), poses=args.poses, occluder=args.occluder == "on")
+    if args.json:
+        print(json.dumps(result.as_json()))
+        return 0
+    print(f"{'action':<7} {'object':<22} {'destination':<11} outcome")
+    for a in result.actions:
+        print(f"{a.action:<7} {a.object:<22} {a.destination or '-':<11} {a.outcome}")
+    print(f"\ngoal {'reached' if result.goal_reached else 'NOT reached'} with {result.replans} replans in "
+          f"{result.wall_s:.1f} s ({args.poses} poses, occluder {args.occluder})")
+    return 0
+
+
 def _grasps(args) -> int:
     from sim.recording.grasp_pictures import save_grasp_picture
     from sim.world.parts import cell_parts
@@ -189,6 +212,18 @@ def build_parser() -> argparse.ArgumentParser:
                      help="write each episode's MP4 and a PNG contact sheet (views, recognised poses, grasps) here")
     run.add_argument("--json", action="store_true", help="print one JSON line of summary figures")
     run.set_defaults(run=_run)
+    plan = sub.add_parser("plan", help="plan and execute a process plan, binding its objects to recognised parts")
+    plan.add_argument("plan", metavar="PLAN.yaml", help="plan file, e.g. tasks/plans/kit.yaml")
+    plan.add_argument("--seed", type=seed, default=0)
+    plan.add_argument("--poses", choices=choices(PoseSource), default=PoseSource.RECOGNIZED.value,
+                      help="grasp from the recognizer's poses (default) or the true ones")
+    plan.add_argument("--occluder", choices=("on", "off"), default="on",
+                      help="a person reaches over the table now and then (default on)")
+    plan.add_argument("--pddl", metavar="DIR", help="also write the domain and problem as DIR/domain.pddl and "
+                      "DIR/problem.pddl")
+    plan.add_argument("--json", action="store_true", help="print one JSON line: goal_reached, actions, replans, "
+                      "wall_s")
+    plan.set_defaults(run=_plan)
     grasps = sub.add_parser("grasps", help="draw each part of a task with its grasps, a PNG per part")
     grasps.add_argument("task", metavar="TASK.yaml", help="task file, e.g. tasks/printed_parts.yaml")
     grasps.add_argument("--out", metavar="DIR", required=True,

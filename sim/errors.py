@@ -33,6 +33,12 @@ class TaskFileError(SimError, CloudFileError):
     the message names the file, the problem and the fix."""
 
 
+class UnreachableGoalError(SimError):
+    """A process plan's goal cannot be reached in its cell: an object not on the table, a part sent where the
+    cell cannot put it, a goal at odds with itself, or a person's actions that do not reach it. Raised
+    before the robot moves; the message names the plan file and the reason."""
+
+
 class GraspCatalogError(SimError, CatalogError):
     """The workpiece catalog's grasps cannot be read; the message names the file, the problem and the fix."""
 

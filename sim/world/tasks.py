@@ -91,7 +91,7 @@ def _read(path: Path):
     if not path.is_file():
         raise TaskFileError(path, "no such task file", _EXAMPLE)
     try:
-        return yaml.load(path.read_text(encoding="utf-8"), Loader=_lined_loader())
+        return yaml.load(path.read_text(encoding="utf-8"), Loader=lined_loader())
     except UnicodeDecodeError:
         raise TaskFileError(path, "not UTF-8 text", "save the task file as UTF-8 YAML") from None
     except yaml.YAMLError as exc:
@@ -164,7 +164,7 @@ def _mesh_part(path: Path, entry: _Lined) -> MeshPart:
     return part
 
 
-def _lined_loader():
+def lined_loader():
     """A safe YAML loader whose mappings and sequences remember their lines, and that refuses a key given twice
     in one mapping, which PyYAML would take silently, keeping the last value."""
     import yaml

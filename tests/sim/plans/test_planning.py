@@ -1,0 +1,69 @@
+"""The cell's STRIPS domain in unified-planning (sim/plans/planning.py): plans, PDDL, and goals refused."""
+
+from pathlib import Path
+
+import pytest
+
+from sim.errors import UnreachableGoalError
+from sim.plans import Step, goal_places, load_plan, solve, write_pddl
+from sim.plans.planning import check_actions
+
+REPO = Path(__file__).resolve().parents[3]
+
+
+def _plan(tmp_path, goal: str, actions: str = "", task: str = "workpieces: [chassis, transformer]\n"):
+    (tmp_path / "cell.yaml").write_text(task)
+    path = tmp_path / "plan.yaml"
+    path.write_text(f"task: cell.yaml\ngoal:\n{goal}" + (f"actions:\n{actions}" if actions else ""))
+    return load_plan(path)
+
+
+def test_the_planner_puts_every_object_in_its_place(tmp_path):
+    plan = _plan(tmp_path, "  - in(chassis, fixture)\n  - in(transformer, fixture)\n")
+    steps = solve(goal_places(plan))
+    assert sorted(steps, key=lambda s: (s.object, s.action)) == [
+        Step("pick", "chassis"), Step("place", "chassis", "fixture"),
+        Step("pick", "transformer"), Step("place", "transformer", "fixture")]
+    for k, step in enumerate(steps):  # each pick is followed by its place
+        if step.action == "pick":
+            assert steps[k + 1] == Step("place", step.object, "fixture")
+
+
+def test_a_replan_leaves_out_what_is_placed(tmp_path):
+    plan = _plan(tmp_path, "  - in(chassis, fixture)\n  - in(transformer, fixture)\n")
+    steps = solve(goal_places(plan), frozenset({"chassis"}))
+    assert steps == (Step("pick", "transformer"), Step("place", "transformer", "fixture"))
+
+
+def test_a_part_sent_where_the_cell_cannot_put_it_is_refused(tmp_path):
+    plan = _plan(tmp_path, "  - in(chassis, tote)\n")
+    with pytest.raises(UnreachableGoalError, match="in\\(chassis, tote\\) cannot be reached: the cell puts "
+                                                   "chassis in its fixture"):
+        goal_places(plan)
+
+
+def test_the_persons_actions_are_taken_when_they_reach_the_goal(tmp_path):
+    plan = _plan(tmp_path, "  - in(chassis, fixture)\n",
+                 "  - pick(chassis)\n  - place(chassis, fixture)\n")
+    assert check_actions(plan, goal_places(plan)) == (Step("pick", "chassis"), Step("place", "chassis", "fixture"))
+
+
+def test_actions_that_fall_short_of_the_goal_are_refused(tmp_path):
+    plan = _plan(tmp_path, "  - in(chassis, fixture)\n  - in(transformer, fixture)\n",
+                 "  - pick(chassis)\n  - place(chassis, fixture)\n")
+    with pytest.raises(UnreachableGoalError, match="the person's actions do not reach the goal"):
+        check_actions(plan, goal_places(plan))
+
+
+def test_actions_out_of_order_are_refused(tmp_path):
+    plan = _plan(tmp_path, "  - in(chassis, fixture)\n", "  - place(chassis, fixture)\n  - pick(chassis)\n")
+    with pytest.raises(UnreachableGoalError, match="do not reach the goal"):
+        check_actions(plan, goal_places(plan))
+
+
+def test_the_domain_and_problem_are_written_as_pddl(tmp_path):
+    plan = load_plan(REPO / "tasks" / "plans" / "red_hub.yaml")
+    domain, problem = write_pddl(goal_places(plan), tmp_path / "pddl")
+    assert "(:action pick" in domain.read_text() and "(:action place" in domain.read_text()
+    text = problem.read_text()
+    assert "red_hub - part" in text and "(in red_hub red_hub_fixture)" in text
