@@ -1,4 +1,5 @@
-"""The simulated robot cell (MuJoCo). ``gymnasium.make("psorr/PickPlace-v0")`` gives :class:`sim.env.PickPlaceEnv`.
+"""The simulated robot cell (MuJoCo). ``gymnasium.make("psorr/PickPlace-v0")`` gives :class:`sim.env.PickPlaceEnv`,
+``gymnasium.make("psorr/PickPlace-v1", plan=...)`` the plan-level :class:`sim.plans.env.PlanPickPlaceEnv`.
 
 The packages follow what drives what, bottom up:
 
@@ -19,10 +20,15 @@ are the errors and the string modes every layer shares.
 import gymnasium
 
 ENV_ID = "psorr/PickPlace-v0"
+PLAN_ENV_ID = "psorr/PickPlace-v1"
 
 # Registering an id twice warns (a reload, or a second import under another name): register once.
 if ENV_ID not in gymnasium.envs.registry:
     # The step limit is gymnasium's TimeLimit (visible in the spec, set by make's max_episode_steps), not the env's own.
     # 100 is sim.env.DEFAULT_MAX_STEPS, written out so that `import sim` does not load MuJoCo (a test holds them equal).
     gymnasium.register(id=ENV_ID, entry_point="sim.env:PickPlaceEnv", max_episode_steps=100,
+                       kwargs={"max_steps": None})
+if PLAN_ENV_ID not in gymnasium.envs.registry:
+    # 60 is sim.plans.env.DEFAULT_MAX_STEPS, written out for the same reason.
+    gymnasium.register(id=PLAN_ENV_ID, entry_point="sim.plans.env:PlanPickPlaceEnv", max_episode_steps=60,
                        kwargs={"max_steps": None})

@@ -83,12 +83,14 @@ class Episode:
         occluder: the human reaches over the table on a seeded timeline; the robot watches for it.
         recorder: gets every physics step and each look (see :mod:`sim.recording.recorder`), or None.
         rgb: looks also render the colour image; default: only when there is a recorder to show it.
+        colours: looks name each detection's colour; default: when ``WorldConfig.pick`` names a colour.
 
     Call :meth:`close` when done (or use it as a context manager): it frees the renderers.
     """
 
     def __init__(self, world: World, rng: np.random.Generator, poses: PoseSource | str = PoseSource.RECOGNIZED,
-                 occluder: bool = False, recorder: Recorder | None = None, rgb: bool | None = None):
+                 occluder: bool = False, recorder: Recorder | None = None, rgb: bool | None = None,
+                 colours: bool | None = None):
         poses = parse_mode(PoseSource, poses, "poses")
         if occluder and not world.occluder_geoms:
             raise SimInputError("occluder=True needs a world built with WorldConfig(occluder=True)")
@@ -103,7 +105,7 @@ class Episode:
         self.remaining, self.wanted_colour = _wanted(world)
         recognizing = poses is PoseSource.RECOGNIZED
         rgb = recorder is not None if rgb is None else rgb
-        colours = any(self.wanted_colour.values())
+        colours = any(self.wanted_colour.values()) if colours is None else colours
         self.perception = Perception(world, rng, recognize=recognizing, rgb=rgb, colours=colours) \
             if recognizing or occluder else None
         self.cell = ArmCell(world, human=human, monitor=self.perception if occluder else None, recorder=recorder)

@@ -1,0 +1,247 @@
+"""``psorr/PickPlace-v1``: a gymnasium env for planners of process plans. Which recognised object to move,
+and where; the robot does the rest (grasp planning, IK, the protective stop).
+
+Action Space:
+    ``MultiDiscrete([max_objects + 1, 2])``: a slot of the latest look's detections (the last index waits
+    ``WAIT_S`` and looks again), and a destination, ``DESTINATIONS`` ("fixture": the part's own, or
+    "tote"). A move is refused, without moving anything, when the slot is empty, someone is reaching
+    in, or the cell does not put that part there. ``info["action_mask"]`` ((max_objects + 1, 2) int8)
+    marks the moves that would not be refused.
+
+Observation Space:
+    A ``Dict`` (world frame, metres): per detection slot, padded to ``max_objects``, ``model``
+    (index into :attr:`models`), ``pose`` (position and quaternion w, x, y, z; w >= 0), ``score``,
+    ``colour`` (index into ``psorr.segment.PALETTE``'s names; the last index is "not named") and
+    ``valid``; ``occupancy`` (2,): the share of the fixtures filled, and of the tote's slots;
+    ``holding`` (1,): the gripper holds a part; ``occupied`` (1,): someone is reaching in; ``depth``: the
+    latest look's Kinect depth (zeros for an oracle look).
+
+Rewards:
+    +1 for a part placed that the goal wants there (an instance of a goal object's part, in its colour
+    when the goal names one, not yet counted); -1 for a part dropped or placed where the goal does not
+    want it; -0.01 a wait; -0.1 a refused move.
+
+Episode End:
+    Terminated when the goal holds (simulator truth: ``info["is_success"]``; ``info["goal_left"]`` lists the
+    goal objects not placed yet, as (part, colour or None, destination)); truncated after
+    ``max_steps`` actions, after ``MAX_EPISODE_S`` of simulated time, or when the workspace stays blocked.
+
+Version History:
+    v1: the plan-level env (objects by detection, destinations). v0 (:mod:`sim.env`) picks by part index.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+
+import gymnasium as gym
+import mujoco
+import numpy as np
+from gymnasium import spaces
+
+from psorr.segment.colour import PALETTE, colour_name
+from psorr.sensing.kinect_noise import KINECT_V1
+from sim.devices.render_backend import ensure_headless_gl
+from sim.episode import MAX_EPISODE_S, Episode
+from sim.errors import ResetNeededError, SimInputError, WorkspaceBlockedError
+from sim.modes import PoseSource, parse_mode
+from sim.plans.plan_file import ProcessPlan, load_plan
+from sim.plans.planning import goal_places
+from sim.world import World, build_world
+
+DESTINATIONS = ("fixture", "tote")
+COLOURS = (*PALETTE, None)
+PLACE_REWARD, WRONG_REWARD, WAIT_REWARD, REFUSED_REWARD = 1.0, -1.0, -0.01, -0.1
+DEFAULT_MAX_STEPS = 60
+
+
+class PlanPickPlaceEnv(gym.Env):
+    """A process plan's cell, one move per step (see the module docstring).
+
+    Args:
+        plan: a plan file (``tasks/plans/*.yaml``) or a :class:`ProcessPlan`.
+        poses: ``"recognized"`` (PSORR on the Kinect's cloud) or ``"oracle"``.
+        occluder: a person reaches over the table now and then.
+        render_mode: None or ``"rgb_array"``.
+        max_objects: detection slots; default: the task's part instances.
+        max_steps: moves after which the episode is truncated; None for no limit of the env's own.
+
+    Attributes:
+        models: the part names a slot's ``model`` indexes. world, episode: the current cell and
+            :class:`Episode`, None before :meth:`reset`.
+    """
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 1}
+
+    def __init__(self, plan: str | os.PathLike | ProcessPlan, poses: PoseSource | str = PoseSource.RECOGNIZED,
+                 occluder: bool = True, render_mode: str | None = None, max_objects: int | None = None,
+                 max_steps: int | None = DEFAULT_MAX_STEPS):
+        self.plan = plan if isinstance(plan, ProcessPlan) else load_plan(plan)
+        self.poses, self.occluder = parse_mode(PoseSource, poses, "poses"), bool(occluder)
+        if render_mode not in (None, *self.metadata["render_modes"]):
+            raise SimInputError(f"render_mode must be None or one of {self.metadata['render_modes']}")
+        self.render_mode, self.max_steps = render_mode, max_steps
+        self.goal = goal_places(self.plan)  # name -> (object, place); refuses a goal the cell cannot reach
+        self.config = dataclasses.replace(self.plan.task.world, occluder=self.occluder, pick=())
+        from sim.world.parts import instance_names
+
+        self.models = tuple(sorted(set(self.config.workpieces)))
+        n = max_objects or len(instance_names(self.config))
+        self.max_objects = n
+        self.action_space = spaces.MultiDiscrete([n + 1, len(DESTINATIONS)])
+        hx, hy = (v / 2 + 0.1 for v in self.config.table_size)
+        low, high = np.array([-hx, -hy, 0, -1, -1, -1, -1], np.float32), np.array([hx, hy, 2, 1, 1, 1, 1], np.float32)
+        self.observation_space = spaces.Dict({
+            "model": spaces.MultiDiscrete([len(self.models)] * n), "pose": spaces.Box(np.tile(low, (n, 1)),
+                                                                                     np.tile(high, (n, 1))),
+            "score": spaces.Box(0.0, 1.0, (n,), np.float32), "colour": spaces.MultiDiscrete([len(COLOURS)] * n),
+            "valid": spaces.MultiBinary(n), "occupancy": spaces.Box(0.0, 1.0, (2,), np.float32),
+            "holding": spaces.MultiBinary(1), "occupied": spaces.MultiBinary(1),
+            "depth": spaces.Box(0.0, KINECT_V1.depth_range[1], self.config.intrinsics.shape, np.float32),
+        })
+        self.world: World | None = None
+        self.episode: Episode | None = None
+        self._slots: list[tuple[str, object]] = []
+        self._look = None
+        self._counted: set[str] = set()
+        self._steps = 0
+        self._renderer: mujoco.Renderer | None = None
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        super().reset(seed=seed)
+        self.close()
+        self.world = build_world(self.config, self.np_random)
+        colours = any(obj.colour for obj, _ in self.goal.values())
+        self.episode = Episode(self.world, self.np_random, self.poses, self.occluder, colours=colours)
+        self._counted, self._steps = set(), 0
+        self._take_look()
+        return self._observation(), self._info()
+
+    def step(self, action):
+        if self.episode is None:
+            raise ResetNeededError("call reset() before step()")
+        if not self.action_space.contains(np.asarray(action)):
+            raise SimInputError(f"action must be [slot in 0..{self.max_objects}, destination in 0..1] "
+                                f"({', '.join(DESTINATIONS)}); got {action!r}")
+        slot, where = int(action[0]), DESTINATIONS[int(action[1])]
+        self._steps += 1
+        reward, refused, pick, gave_up = 0.0, "", None, ""
+        try:
+            if slot == self.max_objects:
+                reward = WAIT_REWARD
+                self.episode.wait()
+                self._take_look()
+            elif refused := self._refusal(slot, where):
+                reward = REFUSED_REWARD
+            else:
+                body, estimate = self._slots[slot]
+                pick = self.episode.pick(body, estimate.T_world_part, alternatives=estimate.alternatives)
+                reward = self._reward(pick)
+                self._take_look()
+        except WorkspaceBlockedError as exc:
+            gave_up = str(exc)
+        success = self._goal_holds()
+        out = (self.max_steps is not None and self._steps >= self.max_steps) or self.world.data.time > MAX_EPISODE_S
+        truncated = not success and (out or bool(gave_up) or not self.episode.remaining)
+        return self._observation(), float(reward), success, truncated, self._info(pick, refused, gave_up)
+
+    def render(self):
+        """The Kinect RGB (H, W, 3) uint8 of the latest look; for a look without a picture, the cell now."""
+        if self.render_mode is None:
+            gym.logger.warn("render() was called without a render_mode: make the env with render_mode='rgb_array'")
+            return None
+        if self._look is None:
+            raise ResetNeededError("call reset() before render()")
+        if self._look.frame is not None and self._look.frame.rgb is not None:
+            return self._look.frame.rgb.copy()
+        if self._renderer is None:
+            ensure_headless_gl()
+            self._renderer = mujoco.Renderer(self.world.model, *self.config.intrinsics.shape)
+        self._renderer.update_scene(self.world.data, camera=self.world.camera_name)
+        return self._renderer.render().copy()
+
+    def close(self) -> None:
+        if self.episode is not None:
+            self.episode.close()
+        if self._renderer is not None:
+            self._renderer.close()
+        self.episode = self._look = self._renderer = None
+
+    # -------------------------------------------------------------------------------- internals
+
+    def _take_look(self) -> None:
+        self._look = self.episode.look()
+        bound = self.episode.estimates(self._look)
+        self._slots = sorted(bound.items())[: self.max_objects]
+
+    def _refusal(self, slot: int, where: str) -> str:
+        if slot >= len(self._slots):
+            return f"slot {slot} holds no detection in the latest look"
+        if self._look.occupied:
+            return "someone is reaching over the table: wait and look again"
+        body = self._slots[slot][0]
+        if self.world.places.get(body) != where:
+            return f"the cell puts {self.world.part_types[body]} in {self.world.places.get(body)}, not in {where}"
+        return ""
+
+    def _reward(self, pick) -> float:
+        if not pick.placed:
+            return WRONG_REWARD
+        name = self._goal_object_for(pick.part)
+        if name is None:
+            return WRONG_REWARD
+        self._counted.add(name)
+        return PLACE_REWARD
+
+    def _goal_object_for(self, body: str) -> str | None:
+        """The goal object not yet counted that ``body`` (truth: its part and colour) satisfies, if any."""
+        kind, colour = self.world.part_types[body], colour_name(self.world.catalog[body].color)
+        for name, (obj, place) in self.goal.items():
+            if name not in self._counted and obj.part == kind and obj.colour in (None, colour) \
+                    and self.world.places[body] == place:
+                return name
+        return None
+
+    def _goal_holds(self) -> bool:
+        return len(self._counted) == len(self.goal)
+
+    def _observation(self) -> dict:
+        n = self.max_objects
+        obs = {"model": np.zeros(n, np.int64), "pose": np.zeros((n, 7), np.float32),
+               "score": np.zeros(n, np.float32), "colour": np.full(n, len(COLOURS) - 1, np.int64),
+               "valid": np.zeros(n, np.int8)}
+        for i, (body, estimate) in enumerate(self._slots):
+            T, q = estimate.T_world_part, np.zeros(4)
+            mujoco.mju_mat2Quat(q, np.ascontiguousarray(T[:3, :3]).ravel())
+            obs["model"][i] = self.models.index(self.world.part_types[body])
+            obs["pose"][i] = [*T[:3, 3], *(q if q[0] >= 0 else -q)]
+            obs["score"][i] = estimate.score
+            obs["colour"][i] = COLOURS.index(estimate.colour) if estimate.colour in PALETTE else len(COLOURS) - 1
+            obs["valid"][i] = 1
+        obs["occupancy"] = self._occupancy()
+        obs["holding"] = np.array([self.episode.cell.holding is not None], np.int8)
+        obs["occupied"] = np.array([self._look.occupied], np.int8)
+        frame = self._look.frame
+        obs["depth"] = (frame.depth.astype(np.float32) if frame is not None
+                        else np.zeros(self.config.intrinsics.shape, np.float32))
+        return obs
+
+    def _occupancy(self) -> np.ndarray:
+        places = self.world.places
+        placed = {p.part for p in self.episode.picks if p.placed}
+        out = []
+        for where in DESTINATIONS:
+            bodies = [b for b in places if places[b] == where]
+            out.append(sum(b in placed for b in bodies) / len(bodies) if bodies else 0.0)
+        return np.array(out, np.float32)
+
+    def _info(self, pick=None, refused: str = "", gave_up: str = "") -> dict:
+        mask = np.zeros((self.max_objects + 1, len(DESTINATIONS)), np.int8)
+        mask[-1] = 1
+        for slot in range(self.max_objects):
+            for d, where in enumerate(DESTINATIONS):
+                mask[slot, d] = not self._refusal(slot, where)
+        left = [(obj.part, obj.colour, place) for name, (obj, place) in self.goal.items() if name not in self._counted]
+        return {"is_success": self._goal_holds(), "action_mask": mask, "goal_left": left, "pick": pick,
+                "refused": refused, "gave_up": gave_up, "sim_time": float(self.world.data.time)}
