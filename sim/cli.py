@@ -15,6 +15,9 @@ them in its camera, waits before looking again and stops while they reach.
 person's actions in it, once they reach the goal) and executes it, binding each symbolic object to a
 part the robot recognises; a failed action is repaired by planning again.
 
+`sweep SWEEP.yaml --out DIR` runs a grid of seeded episodes on a local process pool (or on Ray with
+--ray), writing DIR/episodes.parquet and DIR/picks.parquet; a stopped sweep resumes where it left off.
+
 `grasps TASK.yaml --out DIR` draws each part of a task as the cell builds it, with its grasps in each of
 its most probable rests (the upright part's alone for a part placed upright): one PNG a part.
 """
@@ -161,6 +164,31 @@ def _plan(args) -> int:
     return 0
 
 
+def _sweep(args) -> int:
+    from tqdm import tqdm
+
+    from sim.sweeps import gather, load_sweep, pending, run_local, run_ray
+    from sim.sweeps.report import save_plot, summary_rows, summary_table
+
+    sweep = load_sweep(args.sweep)
+    out = check_output(args.out, "--out")
+    todo = pending(sweep, out)
+    _log(f"{len(sweep.episodes)} episodes in the grid, {len(sweep.episodes) - len(todo)} already in {out}")
+    with tqdm(total=len(todo), desc="sweep", file=sys.stderr) as bar:
+        if args.ray is not None:
+            run_ray(todo, out, args.ray or None, done=lambda row: bar.update())
+        else:
+            run_local(todo, out, args.workers, done=lambda row: bar.update())
+    episodes_path, picks_path = gather(sweep, out)
+    import pyarrow.parquet as pq
+
+    rows = summary_rows(pq.read_table(episodes_path), sweep.swept)
+    print(summary_table(rows))
+    picture = save_plot(rows, out / "grasp_success.png")
+    _log(f"wrote {episodes_path}, {picks_path} and {picture}")
+    return 0
+
+
 def _grasps(args) -> int:
     from sim.recording.grasp_pictures import save_grasp_picture
     from sim.world.parts import cell_parts
@@ -224,6 +252,14 @@ def build_parser() -> argparse.ArgumentParser:
     plan.add_argument("--json", action="store_true", help="print one JSON line: goal_reached, actions, replans, "
                       "wall_s")
     plan.set_defaults(run=_plan)
+    sweep = sub.add_parser("sweep", help="run a grid of seeded episodes to Parquet, locally or on Ray")
+    sweep.add_argument("sweep", metavar="SWEEP.yaml", help="sweep file, e.g. tasks/sweeps/smoke.yaml")
+    sweep.add_argument("--out", metavar="DIR", required=True, help="write the rows and the summary here; "
+                       "a sweep started again with the same DIR resumes")
+    sweep.add_argument("--workers", type=at_least_one, default=2, help="local processes (default 2)")
+    sweep.add_argument("--ray", nargs="?", const="", default=None, metavar="ADDRESS",
+                       help="run each episode as a Ray task: a local Ray instance, or the cluster at ADDRESS")
+    sweep.set_defaults(run=_sweep)
     grasps = sub.add_parser("grasps", help="draw each part of a task with its grasps, a PNG per part")
     grasps.add_argument("task", metavar="TASK.yaml", help="task file, e.g. tasks/printed_parts.yaml")
     grasps.add_argument("--out", metavar="DIR", required=True,
