@@ -4,9 +4,10 @@ action fails.
 Each plan object becomes an entry of ``WorldConfig.pick`` (``"red hub"``), so an :class:`sim.episode.Episode`
 binds it to a recognised instance of its part, by the colour the look saw it in where the plan names
 one. Which body that is stays simulator truth and only grades the action. The cell is looked at again
-before every pick. A pick that fails (the part not seen, not held, not placed) leaves the object
-where it is: it is put back among the objects to pick, and the rest of the goal is planned again from
-what is placed, up to ``max_replans`` times.
+before every pick. A pick that fails with the part still on the table (not seen, not held) puts it back
+among the objects to pick, and the rest of the goal is planned again from what is placed, up to
+``max_replans`` times; a part carried to its place and left there unseated cannot be picked from there,
+and the rest of the goal is planned without it.
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from sim.episode import MAX_BLIND_LOOKS, Episode
 from sim.errors import SimInputError, UnreachableGoalError, WorkspaceBlockedError
 from sim.modes import PoseSource
 from sim.plans.plan_file import ProcessPlan
-from sim.plans.planning import Step, check_actions, goal_places, solve
+from sim.plans.planning import check_actions, goal_places, solve
 from sim.skills.judging import PickResult
 from sim.world import build_world
 
@@ -77,25 +78,29 @@ def run_plan(plan: ProcessPlan, rng: np.random.Generator, poses: PoseSource | st
         raise UnreachableGoalError(f"{plan.path}: {exc}") from None
     with episode:
         bodies = dict(zip(objects, episode.remaining))
-        outcomes, placed, replans = [], set(), 0
+        outcomes, placed, lost, replans = [], set(), set(), 0
         limit = 2 * len(objects) if max_replans is None else max_replans
-        while steps:
-            picks = [s for s in steps if s.action == "pick"]
-            failed = None
-            for step in picks:
-                result = _pick_and_place(episode, bodies[step.object])
-                outcomes += _outcomes(step, objects[step.object][1], result)
-                if result is not None and result.placed:
-                    placed.add(step.object)
-                else:
-                    failed = step
-                    break
-            if failed is None or replans >= limit:
+        pending = [s.object for s in steps if s.action == "pick"]
+        while pending:
+            # A planner's picks of different objects touch only their own object's facts and the hand, so
+            # any order of them reaches the goal: take the first one this look sees. A person's order is kept.
+            allowed = pending if plan.actions is None else pending[:1]
+            name, result = _pick_and_place(episode, {bodies[n]: n for n in allowed})
+            name = name or allowed[0]
+            outcomes += _outcomes(name, objects[name][1], result)
+            if result is not None and result.placed:
+                placed.add(name)
+                pending.remove(name)
+                continue
+            if result is not None and result.grasped:
+                lost.add(name)  # carried to its place and left there unseated: the robot cannot pick it there
+            elif replans < limit and bodies[name] not in episode.remaining:
+                episode.remaining.insert(0, bodies[name])  # a pick tried takes it off; it is still on the table
+            if replans >= limit:
                 break
             replans += 1
-            if bodies[failed.object] not in episode.remaining:  # a pick tried takes it off; it is still to pick
-                episode.remaining.insert(0, bodies[failed.object])
-            steps = solve(objects, frozenset(placed), plan.path)
+            todo = {k: v for k, v in objects.items() if k not in lost}
+            pending = [s.object for s in solve(todo, frozenset(placed), plan.path) if s.action == "pick"]
     reached = all(any(p.part == bodies[name] and p.placed for p in episode.picks) for name in objects)
     others = [b for b in world.workpieces if b not in bodies.values()]
     moved = tuple(b for b in others if np.linalg.norm(world.body_pose(b)[:3, 3]
@@ -103,9 +108,10 @@ def run_plan(plan: ProcessPlan, rng: np.random.Generator, poses: PoseSource | st
     return PlanResult(reached, tuple(outcomes), replans, time.perf_counter() - start, tuple(episode.picks), moved)
 
 
-def _pick_and_place(episode: Episode, body: str) -> PickResult | None:
-    """Look until ``body``'s object is seen where nobody reaches in, then pick and place it; None when it was
-    not seen in ``MAX_BLIND_LOOKS`` looks in a row, or the workspace stayed blocked."""
+def _pick_and_place(episode: Episode, wanted: dict[str, str]) -> tuple[str | None, PickResult | None]:
+    """Look until one of ``wanted``'s objects (body -> object name, in the order to prefer) is seen where
+    nobody reaches in, then pick and place it: (its name, the result). (None, None) when none was seen in
+    ``MAX_BLIND_LOOKS`` looks in a row, or the workspace stayed blocked."""
     blind = looks = 0
     try:
         while blind < MAX_BLIND_LOOKS:
@@ -114,8 +120,9 @@ def _pick_and_place(episode: Episode, body: str) -> PickResult | None:
             if look.occupied:
                 episode.wait()
                 continue
-            estimate = episode.estimates(look).get(body)
-            if estimate is None:
+            seen = episode.estimates(look)
+            body = next((b for b in wanted if b in seen), None)
+            if body is None:
                 blind += 1
                 episode.wait()
                 continue
@@ -123,16 +130,18 @@ def _pick_and_place(episode: Episode, body: str) -> PickResult | None:
                                                                                episode.cell.holding):
                 episode.wait()
                 continue
-            return episode.pick(body, estimate.T_world_part, looks=looks, alternatives=estimate.alternatives)
+            estimate = seen[body]
+            return wanted[body], episode.pick(body, estimate.T_world_part, looks=looks,
+                                              alternatives=estimate.alternatives)
     except WorkspaceBlockedError:
-        return None
-    return None
+        return None, None
+    return None, None
 
 
-def _outcomes(step: Step, place: str, result: PickResult | None) -> list[ActionOutcome]:
+def _outcomes(name: str, place: str, result: PickResult | None) -> list[ActionOutcome]:
     if result is None:
-        return [ActionOutcome("pick", step.object, "", "not recognised")]
-    pick = ActionOutcome("pick", step.object, "", "grasped" if result.grasped else "not grasped")
+        return [ActionOutcome("pick", name, "", "not recognised")]
+    pick = ActionOutcome("pick", name, "", "grasped" if result.grasped else "not grasped")
     if not result.grasped:
         return [pick]
-    return [pick, ActionOutcome("place", step.object, place, "placed" if result.placed else "not placed")]
+    return [pick, ActionOutcome("place", name, place, "placed" if result.placed else "not placed")]

@@ -38,9 +38,9 @@ def test_a_colour_the_table_does_not_hold_is_refused_before_the_robot_moves(tmp_
 def test_a_failed_action_is_repaired_by_planning_again(tmp_path, monkeypatch):
     real, calls = execution._pick_and_place, []
 
-    def unseen_once(episode, body):
-        calls.append(body)
-        return None if len(calls) == 1 else real(episode, body)
+    def unseen_once(episode, wanted):
+        calls.append(list(wanted))
+        return (None, None) if len(calls) == 1 else real(episode, wanted)
 
     monkeypatch.setattr(execution, "_pick_and_place", unseen_once)
     plan = _plan(tmp_path, "  - in(chassis, fixture)\n  - in(transformer, fixture)\n")
@@ -48,7 +48,7 @@ def test_a_failed_action_is_repaired_by_planning_again(tmp_path, monkeypatch):
     assert result.goal_reached and result.replans == 1
     outcomes = [(a.action, a.outcome) for a in result.actions]
     assert outcomes[0] == ("pick", "not recognised") and outcomes.count(("place", "placed")) == 2
-    assert calls.count(calls[0]) == 2  # the object first not seen was tried again
+    assert len(calls) == 3 and set(calls[1]) == set(calls[0])  # both objects still wanted after the failure
 
 
 def test_plan_json_prints_one_line_of_the_contract(tmp_path, capsys):
