@@ -78,3 +78,33 @@ def task_tables(task: str) -> dict:
     stem, name = f"episodes_{task}", f"episodes-{task.replace('_', '-')}"
     return {name: lambda: episodes(stem), f"{name}-per-part": lambda: episodes_per_part(stem),
             f"{name}-failures": lambda: episodes_failures(stem)}
+
+
+def plans() -> str:
+    """benchmarks/plans.py: how often each shipped process plan reaches its goal."""
+    data = load("plans")
+    rows = [[f"`{r['plan']}`", f"{r['goal_reached']}/{r['runs']}", r["replans"],
+             ", ".join(f"{k}: {v}" for k, v in r["failed_actions"].items()) or "none", r["others_moved"],
+             f"{r['wall_s_median']:.1f}"] for r in data["rows"]]
+    return table(["plan", "goal reached", "replans", "failed actions", "parts not in the goal moved",
+                  "wall s a run (median)"], rows, "lrrlrr")
+
+
+def sweep_throughput() -> str:
+    """benchmarks/sweep_throughput.py: one local worker against two."""
+    data = load("sweep_throughput")
+    rows = [[r["workers"], f"{r['wall_s']:.0f}", f"{r['episodes_per_min']:.1f}"] for r in data["rows"]]
+    return table(["workers", "wall s", "episodes a minute"], rows, "rrr") + (
+        f"\n\n{data['episodes']} one-part episodes; speed-up {data['speedup']:.2f}x (target at least 1.8x: "
+        f"{'met' if data['speedup'] >= 1.8 else 'missed'})")
+
+
+def soak() -> str:
+    """benchmarks/soak.py: crashes, lost episodes and each worker's memory over a long run."""
+    data = load("soak")
+    rows = [[k, len(c), f"{c[0]:.0f}", f"{c[len(c) // 2]:.0f}", f"{c[-1]:.0f}"] for k, c in enumerate(data["rss_mb"])]
+    out = table(["worker", "episodes", "MB after its first", "after half", "at the end"], rows, "rrrrr")
+    failed = ", ".join(f"{k}: {v}" for k, v in data["failures"].items()) or "none"
+    return out + (f"\n\n{data['episodes']} episodes on {data['workers']} workers in {data['wall_s'] / 60:.0f} min: "
+                  f"{len(data['crashes'])} crashed, {data['lost']} lost, memory "
+                  f"{'flat' if data['flat'] else 'growing'}; failed picks: {failed}.")

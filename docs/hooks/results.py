@@ -87,7 +87,8 @@ TABLES = {
     **generalization.TABLES,
     "grasp-tolerance": cell.grasp_tolerance,
     "episodes": cell.episodes, "episodes-per-part": cell.episodes_per_part, "episodes-in-hand": cell.episodes_in_hand,
-    **cell.task_tables("clutter"), **cell.task_tables("printed_parts"),
+    **cell.task_tables("clutter"), **cell.task_tables("printed_parts"), "plans": cell.plans,
+    "sweep-throughput": cell.sweep_throughput, "soak": cell.soak,
     "headline": headline,
     "decisions": decisions,
 }

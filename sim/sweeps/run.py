@@ -20,6 +20,8 @@ from sim.sweeps.spec import EpisodeSpec, Sweep
 
 EPISODE_COLUMNS = ("id", "task", "seed", "poses", "camera_height", "resolution", "occluder", "picks", "grasped",
                    "placed", "grasp_success_rate", "place_success_rate", "wall_s", "sim_s", "looks")
+# OpenMP (Open3D), BLAS (numpy), numba, and llvmpipe, the software OpenGL MuJoCo renders with headless.
+THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS", "LP_NUM_THREADS")
 PICK_COLUMNS = ("id", "part", "grasp", "grasped", "placed", "pose_error_mm", "rot_error_deg", "note")
 
 
@@ -98,10 +100,11 @@ def gather(sweep: Sweep, out: Path) -> tuple[Path, Path]:
 
 
 def run_local(specs: Iterable[EpisodeSpec], out: Path, workers: int,
-              done: Callable[[dict], None] = lambda row: None) -> None:
-    """Run ``specs`` on a pool of ``workers`` processes (in this process for 1), saving each as it finishes."""
+              done: Callable[[dict], None] = lambda row: None, pool: bool | None = None) -> None:
+    """Run ``specs`` on a pool of ``workers`` processes, saving each as it finishes; with ``pool`` None, one
+    worker runs in this process."""
     specs = list(specs)
-    if workers == 1:
+    if workers == 1 and not pool:
         for spec in specs:
             episode, picks = run_episode_rows(spec)
             save_rows(out, episode, picks)
@@ -110,12 +113,20 @@ def run_local(specs: Iterable[EpisodeSpec], out: Path, workers: int,
     # Each worker a fresh interpreter (spawn): MuJoCo's renderer and Open3D do not survive a fork.
     import multiprocessing
 
-    with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
-        futures = [pool.submit(run_episode_rows, spec) for spec in specs]
+    with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"),
+                             initializer=one_thread_each) as executor:
+        futures = [executor.submit(run_episode_rows, spec) for spec in specs]
         for future in as_completed(futures):
             episode, picks = future.result()
             save_rows(out, episode, picks)
             done(episode)
+
+
+def one_thread_each() -> None:
+    """Keep a worker's numerical libraries and its software renderer to one thread each. With as many workers
+    as cores, more threads only contend for the same cores. Runs before the worker imports them."""
+    for name in THREAD_VARIABLES:
+        os.environ[name] = "1"
 
 
 def run_ray(specs: Iterable[EpisodeSpec], out: Path, address: str | None,
@@ -134,7 +145,8 @@ def run_ray(specs: Iterable[EpisodeSpec], out: Path, address: str | None,
         ray.init(address=address, num_cpus=num_cpus if address is None else None, include_dashboard=False,
                  log_to_driver=False)
     try:
-        remote = ray.remote(num_cpus=1)(run_episode_rows)
+        threads = dict.fromkeys(THREAD_VARIABLES, "1")
+        remote = ray.remote(num_cpus=1, runtime_env={"env_vars": threads})(run_episode_rows)
         waiting = [remote.remote(spec) for spec in specs]
         while waiting:
             ready, waiting = ray.wait(waiting, num_returns=1)
