@@ -48,7 +48,7 @@ import numpy as np
 from gymnasium import spaces
 
 from psorr.sensing.kinect_noise import KINECT_V1
-from sim.devices.render_backend import ensure_headless_gl
+from sim.devices.look_picture import LookPicture
 from sim.episode import MAX_EPISODE_S, MIN_SCORE, Episode
 from sim.errors import ResetNeededError, SimInputError, WorkspaceBlockedError
 from sim.modes import PoseSource, parse_mode
@@ -113,7 +113,7 @@ class PickPlaceEnv(gym.Env):
         })
         self.world: World | None = None
         self.episode: Episode | None = None
-        self._renderer: mujoco.Renderer | None = None
+        self._picture = LookPicture()
         self._look: Look | None = None
         self._estimates: dict[str, Estimate | None] = {}
         self._done: set[str] = set()
@@ -176,13 +176,7 @@ class PickPlaceEnv(gym.Env):
             return None
         if self._look is None:
             raise ResetNeededError("call reset() before render()")
-        if self._look.frame is not None and self._look.frame.rgb is not None:
-            return self._look.frame.rgb.copy()
-        if self._renderer is None:
-            ensure_headless_gl()
-            self._renderer = mujoco.Renderer(self.world.model, *self.config.intrinsics.shape)
-        self._renderer.update_scene(self.world.data, camera=self.world.camera_name)
-        return self._renderer.render().copy()
+        return self._picture.render(self._look, self.world)
 
     def close(self) -> None:
         """Free the episode's renderers (safe to call twice)."""
@@ -193,9 +187,8 @@ class PickPlaceEnv(gym.Env):
     def _free(self) -> None:
         if self.episode is not None:
             self.episode.close()
-        if self._renderer is not None:
-            self._renderer.close()
-        self.episode = self._renderer = self._look = None
+        self._picture.close()
+        self.episode = self._look = None
 
     def _take_look(self) -> None:
         look = self.episode.look()

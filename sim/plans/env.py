@@ -42,7 +42,7 @@ from gymnasium import spaces
 
 from psorr.segment.colour import PALETTE, colour_name
 from psorr.sensing.kinect_noise import KINECT_V1
-from sim.devices.render_backend import ensure_headless_gl
+from sim.devices.look_picture import LookPicture
 from sim.episode import MAX_EPISODE_S, Episode
 from sim.errors import ResetNeededError, SimInputError, WorkspaceBlockedError
 from sim.modes import PoseSource, parse_mode
@@ -106,7 +106,7 @@ class PlanPickPlaceEnv(gym.Env):
         self._look = None
         self._counted: set[str] = set()
         self._steps = 0
-        self._renderer: mujoco.Renderer | None = None
+        self._picture = LookPicture()
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
@@ -153,20 +153,13 @@ class PlanPickPlaceEnv(gym.Env):
             return None
         if self._look is None:
             raise ResetNeededError("call reset() before render()")
-        if self._look.frame is not None and self._look.frame.rgb is not None:
-            return self._look.frame.rgb.copy()
-        if self._renderer is None:
-            ensure_headless_gl()
-            self._renderer = mujoco.Renderer(self.world.model, *self.config.intrinsics.shape)
-        self._renderer.update_scene(self.world.data, camera=self.world.camera_name)
-        return self._renderer.render().copy()
+        return self._picture.render(self._look, self.world)
 
     def close(self) -> None:
         if self.episode is not None:
             self.episode.close()
-        if self._renderer is not None:
-            self._renderer.close()
-        self.episode = self._look = self._renderer = None
+        self._picture.close()
+        self.episode = self._look = None
 
     # -------------------------------------------------------------------------------- internals
 

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from sim.errors import SimInputError, TaskFileError
-from sim.world.tasks import Task, lined_loader, load_task
+from sim.world.tasks import Task, load_task, read_lined_yaml
 
 PLAN_KEYS = ("task", "goal", "actions")
 PLACES = ("fixture", "tote")
@@ -76,15 +76,8 @@ class ProcessPlan:
 
 def load_plan(path) -> ProcessPlan:
     """Read a plan file; a bad key, term, object or place raises TaskFileError naming its line and the fix."""
-    import yaml
-
     path = Path(path)
-    if not path.is_file():
-        raise TaskFileError(path, "no such plan file", _EXAMPLE)
-    try:
-        spec = yaml.load(path.read_text(encoding="utf-8"), Loader=lined_loader())
-    except (UnicodeDecodeError, yaml.YAMLError) as exc:
-        raise TaskFileError(path, f"not a readable YAML plan ({exc.__class__.__name__})", "fix the syntax") from None
+    spec = read_lined_yaml(path, "plan", _EXAMPLE)
     if not isinstance(spec, dict):
         raise TaskFileError(path, "a plan must be a mapping", f"give the keys {', '.join(PLAN_KEYS)}")
     for key in spec:

@@ -21,7 +21,7 @@ from pathlib import Path
 
 from sim.errors import TaskFileError
 from sim.modes import PoseSource
-from sim.world.tasks import lined_loader, load_task
+from sim.world.tasks import load_task, read_lined_yaml
 
 SWEEP_KEYS = ("tasks", "seeds", "poses", "camera_height", "resolution", "occluder")
 _EXAMPLE = "see tasks/sweeps/smoke.yaml"
@@ -69,15 +69,8 @@ class Sweep:
 
 def load_sweep(path) -> Sweep:
     """Read a sweep file; a bad key or value raises TaskFileError naming its line and the fix."""
-    import yaml
-
     path = Path(path)
-    if not path.is_file():
-        raise TaskFileError(path, "no such sweep file", _EXAMPLE)
-    try:
-        spec = yaml.load(path.read_text(encoding="utf-8"), Loader=lined_loader())
-    except (UnicodeDecodeError, yaml.YAMLError) as exc:
-        raise TaskFileError(path, f"not a readable YAML sweep ({exc.__class__.__name__})", "fix the syntax") from None
+    spec = read_lined_yaml(path, "sweep", _EXAMPLE)
     if not isinstance(spec, dict) or "tasks" not in spec:
         raise TaskFileError(path, "a sweep must be a mapping with tasks:", _EXAMPLE)
     for key in spec:

@@ -84,16 +84,22 @@ def load_task(path) -> Task:
 
 
 def _read(path: Path):
+    return read_lined_yaml(path, "task", _EXAMPLE)
+
+
+def read_lined_yaml(path: Path, kind: str, example: str):
+    """A task, plan or sweep file (``kind``) read with :func:`lined_loader`; a folder, a missing file, bytes
+    that are not UTF-8 or broken YAML raise TaskFileError naming the file and the fix (``example``)."""
     import yaml
 
     if path.is_dir():
-        raise TaskFileError(path, "is a folder, not a task file", "pass a .yaml task in it, such as tasks/demo.yaml")
+        raise TaskFileError(path, f"is a folder, not a {kind} file", f"pass a .yaml {kind} file; {example}")
     if not path.is_file():
-        raise TaskFileError(path, "no such task file", _EXAMPLE)
+        raise TaskFileError(path, f"no such {kind} file", example)
     try:
         return yaml.load(path.read_text(encoding="utf-8"), Loader=lined_loader())
     except UnicodeDecodeError:
-        raise TaskFileError(path, "not UTF-8 text", "save the task file as UTF-8 YAML") from None
+        raise TaskFileError(path, "not UTF-8 text", f"save the {kind} file as UTF-8 YAML") from None
     except yaml.YAMLError as exc:
         where = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
         at = f", line {where.line + 1}" if where is not None else ""
