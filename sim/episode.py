@@ -132,7 +132,7 @@ class Episode:
             truth = {}
             for p in () if occupied else self.remaining:
                 truth.setdefault(self.world.part_types[p], []).append(
-                    Estimate(self.world.body_pose(p), 1.0, colour=_colour_name(self.world, p)))
+                    Estimate(self.world.body_pose(p), 1.0, colour=self.world.colour_name(p)))
             truth = {kind: tuple(estimates) for kind, estimates in truth.items()}
             look = Look(None, (), MappingProxyType(truth), intruding, occupied)
         self.looks += 1
@@ -269,20 +269,14 @@ def _wanted(world: World) -> tuple[list[str], dict[str, str | None]]:
     for entry in world.config.pick:
         colour, part = pick_target(entry, world.config.workpieces)
         left = [b for b in world.bodies_of(part) if b not in colours]
-        match = [b for b in left if colour in (None, _colour_name(world, b))]
+        match = [b for b in left if colour in (None, world.colour_name(b))]
         if not match:
-            seen = ", ".join(f"{b} ({_colour_name(world, b)})" for b in world.bodies_of(part))
+            seen = ", ".join(f"{b} ({world.colour_name(b)})" for b in world.bodies_of(part))
             raise SimInputError(f"pick {entry!r}: no {part}{' in ' + colour if colour else ''} is left to pick; "
                                 f"the table holds {seen}, and pick names each at most once")
         bodies.append(match[0])
         colours[match[0]] = colour
     return bodies, colours
-
-
-def _colour_name(world: World, body: str) -> str:
-    from psorr.segment.colour import colour_name
-
-    return colour_name(world.catalog[body].color)
 
 
 def _not_picked(part: str, why: str) -> PickResult:

@@ -40,17 +40,18 @@ import mujoco
 import numpy as np
 from gymnasium import spaces
 
-from psorr.segment.colour import PALETTE, colour_name
+from psorr.segment.colour import PALETTE
 from psorr.sensing.kinect_noise import KINECT_V1
 from sim.devices.look_picture import LookPicture
 from sim.episode import MAX_EPISODE_S, Episode
 from sim.errors import ResetNeededError, SimInputError, WorkspaceBlockedError
 from sim.modes import PoseSource, parse_mode
+from sim.parts.source import PLACES
 from sim.plans.plan_file import ProcessPlan, load_plan
 from sim.plans.planning import goal_places
 from sim.world import World, build_world
 
-DESTINATIONS = ("fixture", "tote")
+DESTINATIONS = PLACES  # a detection goes to its part's fixture or to the tote
 COLOURS = (*PALETTE, None)
 PLACE_REWARD, WRONG_REWARD, WAIT_REWARD, REFUSED_REWARD = 1.0, -1.0, -0.01, -0.1
 DEFAULT_MAX_STEPS = 60
@@ -189,7 +190,7 @@ class PlanPickPlaceEnv(gym.Env):
 
     def _goal_object_for(self, body: str) -> str | None:
         """The goal object not yet counted that ``body`` (truth: its part and colour) satisfies, if any."""
-        kind, colour = self.world.part_types[body], colour_name(self.world.catalog[body].color)
+        kind, colour = self.world.part_types[body], self.world.colour_name(body)
         for name, (obj, place) in self.goal.items():
             if name not in self._counted and obj.part == kind and obj.colour in (None, colour) \
                     and self.world.places[body] == place:

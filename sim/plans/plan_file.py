@@ -20,10 +20,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from sim.errors import SimInputError, TaskFileError
+from sim.parts.source import PLACES
 from sim.world.tasks import Task, load_task, read_lined_yaml
 
 PLAN_KEYS = ("task", "goal", "actions")
-PLACES = ("fixture", "tote")
 _EXAMPLE = "see tasks/plans/kit.yaml"
 _GOAL = re.compile(r"^in\(\s*([^,()]+?)\s*,\s*([A-Za-z_]+)\s*\)$")
 _ACTION = re.compile(r"^(pick|place)\(\s*([^,()]+?)\s*(?:,\s*([A-Za-z_]+)\s*)?\)$")

@@ -84,6 +84,13 @@ class World:
         """The bodies of the part ``part`` (its instances), in config order; empty for a part not in the world."""
         return tuple(body for body, kind in self.part_types.items() if kind == part)
 
+    def colour_name(self, body: str) -> str:
+        """The palette name (``psorr.segment.PALETTE``) of ``body``'s true colour: simulator truth, to grade
+        a pick of a part wanted in a colour, never what the robot goes by."""
+        from psorr.segment.colour import colour_name
+
+        return colour_name(self.catalog[body].color)
+
     def body_pose(self, name: str, data: mujoco.MjData | None = None) -> np.ndarray:
         """Pose (4, 4) of body ``name`` in ``data`` (default ``self.data``; kinematics must be current)."""
         data = self.data if data is None else data
