@@ -34,6 +34,7 @@ from sim.modes import PoseSource, parse_mode
 from sim.people.human import ReachingHuman
 from sim.skills.judging import PickResult, fixture_error, pose_error, resting_on_table
 from sim.skills.perception import MONITOR_OCCUPIED, Estimate, Look, Perception
+from sim.skills.perception_params import PerceptionParams
 from sim.skills.pick import pick_and_place
 from sim.world import World
 from sim.world.config import pick_target
@@ -84,13 +85,14 @@ class Episode:
         recorder: gets every physics step and each look (see :mod:`sim.recording.recorder`), or None.
         rgb: looks also render the colour image; default: only when there is a recorder to show it.
         colours: looks name each detection's colour; default: when ``WorldConfig.pick`` names a colour.
+        perception: the looks' recognizer and sensor noise (:class:`PerceptionParams`; default PSORR, Kinect v1).
 
     Call :meth:`close` when done (or use it as a context manager): it frees the renderers.
     """
 
     def __init__(self, world: World, rng: np.random.Generator, poses: PoseSource | str = PoseSource.RECOGNIZED,
                  occluder: bool = False, recorder: Recorder | None = None, rgb: bool | None = None,
-                 colours: bool | None = None):
+                 colours: bool | None = None, perception: PerceptionParams | None = None):
         poses = parse_mode(PoseSource, poses, "poses")
         if occluder and not world.occluder_geoms:
             raise SimInputError("occluder=True needs a world built with WorldConfig(occluder=True)")
@@ -100,13 +102,14 @@ class Episode:
         if occluder:
             targets = [world.body_pose(p)[:2, 3] for p in world.workpieces]
             human = ReachingHuman(rng, world.config.table_size, world.table_top, targets=targets,
-                                  eye=world.T_world_camera[:3, 3])
+                                  eye=world.T_world_camera[:3, 3], gap_s=world.config.reach_gap_s)
         self.human = human
         self.remaining, self.wanted_colour = _wanted(world)
         recognizing = poses is PoseSource.RECOGNIZED
         rgb = recorder is not None if rgb is None else rgb
         colours = any(self.wanted_colour.values()) if colours is None else colours
-        self.perception = Perception(world, rng, recognize=recognizing, rgb=rgb, colours=colours) \
+        self.perception = Perception(world, rng, recognize=recognizing, rgb=rgb, colours=colours,
+                                     params=perception) \
             if recognizing or occluder else None
         self.cell = ArmCell(world, human=human, monitor=self.perception if occluder else None, recorder=recorder)
         self.picks: list[PickResult] = []
@@ -284,7 +287,8 @@ def _not_picked(part: str, why: str) -> PickResult:
 
 
 def run_episode(world: World, rng: np.random.Generator, poses: PoseSource | str = PoseSource.ORACLE,
-                occluder: bool = False, recorder: Recorder | None = None) -> EpisodeResult:
+                occluder: bool = False, recorder: Recorder | None = None,
+                perception: PerceptionParams | None = None) -> EpisodeResult:
     """Reset the world to home and run the scripted policy (:class:`Episode`) to the end."""
-    with Episode(world, rng, poses, occluder, recorder) as episode:
+    with Episode(world, rng, poses, occluder, recorder, perception=perception) as episode:
         return episode.run()

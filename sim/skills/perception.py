@@ -24,12 +24,12 @@ import mujoco
 import numpy as np
 
 from psorr.sensing.camera import CameraIntrinsics
-from psorr.sensing.kinect_noise import KINECT_V1
 from psorr.types import Detection, PointCloud
 from sim.control.ik import T_world_site
 from sim.devices.depth_render import DepthBodyRenderer
 from sim.devices.sensor import DepthCamera, SensorFrame, T_world_camera_opencv
 from sim.errors import SimInputError
+from sim.skills.perception_params import PerceptionParams
 from sim.world import World
 from sim.world.parts import standing_height
 
@@ -88,6 +88,7 @@ class Perception:
         rgb: render the colour image with each look (for a recorder or a viewer; PSORR needs depth only).
         colours: name each detection's colour from the points that support it in the look's colour image (to
             pick a part by its colour); renders the colour image whatever ``rgb`` says.
+        params: the recognizer method and the sensor's noise level (default: PSORR, the Kinect v1's noise).
 
     Each look after the first gives PSORR the last recognised look's detections to follow (the camera stands
     still): they are judged again where they were, and only what they no longer explain is searched, so a
@@ -97,12 +98,14 @@ class Perception:
     """
 
     def __init__(self, world: World, rng: np.random.Generator, recognize: bool = True, rgb: bool = True,
-                 colours: bool = False):
+                 colours: bool = False, params: PerceptionParams | None = None):
         self.world, self.rng, self.rgb, self.colours = world, rng, rgb or colours, colours
+        self.params = params or PerceptionParams()
+        self._noise = self.params.noise
         self.camera = DepthCamera(world.model, world.camera_name)
         self._monitor = DepthBodyRenderer(world.model, MONITOR_CAMERA.height, MONITOR_CAMERA.width,
                                           world.model.camera(world.camera_name).id)
-        self._recognizer = _recognizer(world) if recognize else None
+        self._recognizer = _recognizer(world, self.params.method) if recognize else None
         self._known: tuple[Detection, ...] = ()  # the last recognised look's detections, camera frame
         model = world.model
         base = model.body(world.arm.base_body).id
@@ -128,7 +131,7 @@ class Perception:
         top up to the ceiling, less the robot's own pixels and the fixtures'. Cropped points become
         NaN, so the cloud stays organised.
         """
-        frame = self.camera.render(data, self.rng, KINECT_V1, rgb=self.rgb)
+        frame = self.camera.render(data, self.rng, self._noise, rgb=self.rgb)
         T = frame.T_world_camera
         world_pts, valid = self._world_points(frame)
         intruding = self._count_intruding(world_pts[valid], data, holding)
@@ -161,7 +164,7 @@ class Perception:
         included). Returns the detection (camera frame) and ``T_world_camera`` (4, 4)."""
         if self._recognizer is None:
             raise SimInputError("look_at_held needs a Perception built with recognize=True")
-        frame = self.camera.render(data, self.rng, KINECT_V1, rgb=False)
+        frame = self.camera.render(data, self.rng, self._noise, rgb=False)
         T = frame.T_world_camera
         cloud = self._workspace_cloud(frame, *self._world_points(frame))
         return self._recognizer.refine(cloud, part, np.linalg.inv(T) @ T_world_part), T
@@ -208,7 +211,7 @@ class Perception:
         depth = np.where(np.isin(body, self._arm_bodies), 0.0, depth).ravel()
         keep = depth > 0
         # depth_sigma's disparity step is the full-resolution sensor's, which the monitor's image is binned from.
-        depth[keep] += self.rng.normal(size=int(keep.sum())) * KINECT_V1.depth_sigma(depth[keep])
+        depth[keep] += self.rng.normal(size=int(keep.sum())) * self._noise.depth_sigma(depth[keep])
         T = T_world_camera_opencv(self.world.model, data, self.world.camera_name)
         pts = (self._monitor_rays[keep] * depth[keep, None]) @ T[:3, :3].T + T[:3, 3]
         return self._count_intruding(pts, data, holding)
@@ -264,12 +267,12 @@ def _descends(model: mujoco.MjModel, body: int, root: int) -> bool:
 _RECOGNIZERS: dict[tuple, object] = {}
 
 
-def _recognizer(world: World):
-    """A PSORR recognizer for every part in the world (trained once per process; cached on disk by psorr)."""
+def _recognizer(world: World, method: str):
+    """A recognizer for every part in the world (trained once per process; cached on disk by psorr)."""
     from psorr.library.models import ModelLibrary
     from psorr.recognize import Recognizer
 
     paths = tuple(sorted({str(info.mesh_path) for info in world.catalog.values()}))  # one per part, not body
-    if paths not in _RECOGNIZERS:
-        _RECOGNIZERS[paths] = Recognizer(ModelLibrary.from_meshes(list(paths)))
-    return _RECOGNIZERS[paths]
+    if (paths, method) not in _RECOGNIZERS:
+        _RECOGNIZERS[paths, method] = Recognizer(ModelLibrary.from_meshes(list(paths)), method=method)
+    return _RECOGNIZERS[paths, method]

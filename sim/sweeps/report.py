@@ -6,7 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 
 GROUP_COLUMNS = {"tasks": "task", "seeds": "seed", "poses": "poses", "camera_height": "camera_height",
-                 "resolution": "resolution", "occluder": "occluder"}
+                 "resolution": "resolution", "occluder": "occluder", "noise": "noise", "method": "method"}
 
 
 def summary_rows(episodes, swept: tuple[str, ...]) -> list[dict]:

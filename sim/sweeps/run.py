@@ -18,8 +18,8 @@ from pathlib import Path
 
 from sim.sweeps.spec import EpisodeSpec, Sweep
 
-EPISODE_COLUMNS = ("id", "task", "seed", "poses", "camera_height", "resolution", "occluder", "picks", "grasped",
-                   "placed", "grasp_success_rate", "place_success_rate", "wall_s", "sim_s", "looks")
+EPISODE_COLUMNS = ("id", "task", "seed", "poses", "camera_height", "resolution", "occluder", "noise", "method",
+                   "picks", "grasped", "placed", "grasp_success_rate", "place_success_rate", "wall_s", "sim_s", "looks")
 # OpenMP (Open3D), BLAS (numpy), numba, and llvmpipe, the software OpenGL MuJoCo renders with headless.
 THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS", "LP_NUM_THREADS")
 PICK_COLUMNS = ("id", "part", "grasp", "grasped", "placed", "pose_error_mm", "rot_error_deg", "note")
@@ -35,12 +35,12 @@ def run_episode_rows(spec: EpisodeSpec) -> tuple[dict, list[dict]]:
     rng = np.random.default_rng([spec.seed, 0])
     config = spec.world_config()
     world = build_world(config, rng)
-    result = run_episode(world, rng, poses=spec.poses, occluder=spec.occluder)
+    result = run_episode(world, rng, poses=spec.poses, occluder=spec.occluder, perception=spec.perception)
     picks = result.picks
     episode = {"id": spec.id, "task": Path(spec.task).name, "seed": spec.seed, "poses": spec.poses,
                "camera_height": float(config.camera_height), "resolution": spec.resolution,
-               "occluder": spec.occluder, "picks": len(picks), "grasped": sum(p.grasped for p in picks),
-               "placed": sum(p.placed for p in picks),
+               "occluder": spec.occluder, "noise": spec.noise, "method": spec.method, "picks": len(picks),
+               "grasped": sum(p.grasped for p in picks), "placed": sum(p.placed for p in picks),
                "grasp_success_rate": sum(p.grasped for p in picks) / len(picks) if picks else 0.0,
                "place_success_rate": sum(p.placed for p in picks) / len(picks) if picks else 0.0,
                "wall_s": result.wall_s, "sim_s": result.sim_s, "looks": result.looks}
@@ -76,7 +76,8 @@ def _schema(columns: tuple[str, ...]):
     import pyarrow as pa
 
     types = {"seed": pa.int64(), "picks": pa.int64(), "grasped": pa.int64(), "placed": pa.int64(),
-             "looks": pa.int64(), "occluder": pa.bool_(), "camera_height": pa.float64(), "wall_s": pa.float64(),
+             "looks": pa.int64(), "occluder": pa.bool_(), "camera_height": pa.float64(), "noise": pa.float64(),
+             "wall_s": pa.float64(),
              "sim_s": pa.float64(), "grasp_success_rate": pa.float64(), "place_success_rate": pa.float64(),
              "pose_error_mm": pa.float64(), "rot_error_deg": pa.float64()}
     if columns == PICK_COLUMNS:

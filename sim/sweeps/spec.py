@@ -8,6 +8,8 @@
     camera_height: [0.7, 0.9]        # m above the table (default: each task's own)
     resolution: [640x480, 320x240]   # the Kinect's image (default: 640x480); the field of view is kept
     occluder: true                   # the person reaches in (default true)
+    noise: [1, 2]                    # the Kinect v1's axial depth noise times this (default 1)
+    method: [psorr, orr]             # the recognizer (default psorr; orr, psg)
 
 The grid is every combination; each combination is one :class:`EpisodeSpec`, named by its values.
 """
@@ -19,11 +21,13 @@ import itertools
 from dataclasses import dataclass
 from pathlib import Path
 
+from psorr.recognize import Method
 from sim.errors import TaskFileError
 from sim.modes import PoseSource
+from sim.skills.perception_params import PerceptionParams
 from sim.world.tasks import load_task, read_lined_yaml
 
-SWEEP_KEYS = ("tasks", "seeds", "poses", "camera_height", "resolution", "occluder")
+SWEEP_KEYS = ("tasks", "seeds", "poses", "camera_height", "resolution", "occluder", "noise", "method")
 _EXAMPLE = "see tasks/sweeps/smoke.yaml"
 
 
@@ -37,11 +41,19 @@ class EpisodeSpec:
     camera_height: float | None
     resolution: str
     occluder: bool
+    noise: float = 1.0
+    method: str = Method.PSORR.value
 
     @property
     def id(self) -> str:
         height = "task" if self.camera_height is None else f"{self.camera_height:g}"
-        return f"{Path(self.task).stem}-{self.poses}-h{height}-{self.resolution}-occ{int(self.occluder)}-s{self.seed}"
+        return (f"{Path(self.task).stem}-{self.poses}-h{height}-{self.resolution}-occ{int(self.occluder)}"
+                f"-n{self.noise:g}-{self.method}-s{self.seed}")
+
+    @property
+    def perception(self) -> PerceptionParams:
+        """The looks' recognizer and noise level."""
+        return PerceptionParams(method=self.method, noise_scale=self.noise)
 
     def world_config(self):
         """The task's WorldConfig with this episode's camera and person."""
@@ -105,13 +117,13 @@ def _values(path: Path, spec, key: str) -> list:
             raise bad("must be a count of seeds or a list of seeds >= 0")
         return seeds
     defaults = {"poses": [PoseSource.RECOGNIZED.value], "camera_height": [None], "resolution": ["640x480"],
-                "occluder": [True]}
+                "occluder": [True], "noise": [1.0], "method": [Method.PSORR.value]}
     if given is None:
         return defaults[key]
     items = given if isinstance(given, list) else [given]
     for item in items:
         _check(key, item, bad)
-    return [float(i) if key == "camera_height" else i for i in items]
+    return [float(i) if key in ("camera_height", "noise") else i for i in items]
 
 
 def _check(key: str, item, bad) -> None:
@@ -127,4 +139,8 @@ def _check(key: str, item, bad) -> None:
             raise bad(f"must be WIDTHxHEIGHT at the Kinect's 4:3, such as 320x240, got {item!r}")
     if key == "occluder" and not isinstance(item, bool):
         raise bad(f"must be true or false, got {item!r}")
+    if key == "noise" and (isinstance(item, bool) or not isinstance(item, (int, float)) or not 0 <= item <= 10):
+        raise bad(f"must be a multiple of the Kinect v1's depth noise in [0, 10], got {item!r}")
+    if key == "method" and item not in [m.value for m in Method]:
+        raise bad(f"must be among {', '.join(m.value for m in Method)}, got {item!r}")
 

@@ -28,12 +28,24 @@ def test_the_grid_is_every_combination_and_the_smoke_sweep_has_four():
     assert len(load_sweep(REPO / "tasks" / "sweeps" / "smoke.yaml").episodes) == 4
 
 
+def test_noise_and_method_are_swept_into_each_episodes_looks(tmp_path):
+    path = tmp_path / "sweep.yaml"
+    path.write_text(f"tasks: [{REPO / 'tasks' / 'sweeps' / 'one_part.yaml'}]\nnoise: [0.5, 2]\nmethod: [psorr, orr]\n")
+    sweep = load_sweep(path)
+    assert sweep.swept == ("noise", "method") and len(sweep.episodes) == 4
+    looks = {(s.perception.noise_scale, s.perception.method) for s in sweep.episodes}
+    assert looks == {(0.5, "psorr"), (0.5, "orr"), (2.0, "psorr"), (2.0, "orr")}
+    assert len({s.id for s in sweep.episodes}) == 4
+
+
 @pytest.mark.parametrize(("text", "words"), [
     ("tasks: [x.yaml]\nspeed: 3\n", "line 2: unknown key 'speed'"),
     ("tasks: [{task}]\nseeds: -1\n", "line 2: seeds must be a count"),
     ("tasks: [{task}]\nposes: [guessed]\n", "line 2: poses must be among recognized, oracle"),
     ("tasks: [{task}]\nresolution: [640x400]\n", "line 2: resolution must be WIDTHxHEIGHT"),
     ("tasks: [{task}]\ncamera_height: [2.0]\n", "line 2: camera_height must be metres in [0.6, 1.0]"),
+    ("tasks: [{task}]\nnoise: [1, -2]\n", "line 2: noise must be a multiple of the Kinect v1's depth noise"),
+    ("tasks: [{task}]\nmethod: [psorr, ppf]\n", "line 2: method must be among psorr"),
 ])
 def test_each_bad_key_is_named_with_its_line(tmp_path, text, words):
     path = tmp_path / "sweep.yaml"
