@@ -1,7 +1,8 @@
 """Process plans: how often each shipped plan reaches its goal, with recognised poses and the person about.
 
 Runs every plan in ``tasks/plans/`` (the printed-parts plan only when ``../shared/cad`` is there) for
-``--seeds`` seeded runs on one core, and writes ``benchmarks/results/plans.json`` and ``plans.md``: per
+``--seeds`` seeded runs on one core (``--plans NAME ...``: only those, the others' rows kept from the last
+run), and writes ``benchmarks/results/plans.json`` and ``plans.md``: per
 plan, the goals reached, the actions that failed, the replans, the wall time a run, and how many parts
 the goal does not name were moved (a wrong-colour twin picked, a neighbour pushed). Targets: each goal
 reached in at least 9 of 10 runs; the wrong-colour twin never picked.
@@ -45,9 +46,17 @@ def _run(plan, seeds: int) -> dict:
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--seeds", type=int, default=10)
+    parser.add_argument("--plans", nargs="+", metavar="NAME", help="run only these plans (file stems)")
     args = parser.parse_args(argv)
     rows, start = [], time.perf_counter()
+    kept = {}
+    if args.plans and (RESULTS / "plans.json").is_file():
+        kept = {r["plan"]: r for r in json.loads((RESULTS / "plans.json").read_text())["rows"]}
     for path in sorted((ROOT / "tasks" / "plans").glob("*.yaml")):
+        if args.plans and path.stem not in args.plans:
+            if path.stem in kept:
+                rows.append(kept[path.stem])
+            continue
         try:
             plan = load_plan(path)
         except TaskFileError as exc:

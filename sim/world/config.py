@@ -46,6 +46,7 @@ class WorldConfig:
         settle_time: simulated time the parts are left to settle before the home keyframe.
         intrinsics: the camera; MuJoCo needs fx == fy and a centred principal point.
         occluder: add the human arm (``sim/people/occluder.py``) and draw its reach schedule.
+        reach_gap_s: (min, max) seconds the person waits between reaches (each wait drawn uniformly).
         pick: the parts an episode picks, in this order: each a part's name, or a colour of
             ``psorr.segment.PALETTE`` and a part's name (``"red idler"``: the instance the robot sees as red);
             empty: every part, in task order. Parts not named stay on the table.
@@ -71,6 +72,7 @@ class WorldConfig:
     settle_time: float = 0.5
     intrinsics: CameraIntrinsics = KINECT_V1_CAMERA
     occluder: bool = True
+    reach_gap_s: tuple[float, float] = (2.0, 8.0)
     pick: tuple[str, ...] = ()
 
     def __post_init__(self):
@@ -98,6 +100,8 @@ class WorldConfig:
             raise SimInputError("table_size, table_height, fixture_wall, fixture_clearance and tote_wall must be > 0")
         if not 0 <= self.reach[0] < self.reach[1] or min(self.gap, self.drop_height, self.settle_time) < 0:
             raise SimInputError("reach must be (min, max) with 0 <= min < max; gap, drop_height, settle_time >= 0")
+        if len(self.reach_gap_s) != 2 or not 0 < self.reach_gap_s[0] <= self.reach_gap_s[1]:
+            raise SimInputError(f"reach_gap_s must be (min, max) seconds with 0 < min <= max, got {self.reach_gap_s}")
         check_intrinsics(self.intrinsics)
         object.__setattr__(self, "pick", tuple(self.pick))
         for wanted in self.pick:

@@ -16,6 +16,7 @@ A workpiece is a catalog part's name, or a mapping that names a mesh of the user
     min_gap: 0.0                    # m between footprints (default 0.02); 0 lets parts touch
     pick: [red idler]               # which parts to pick, in order, each by name and optionally by the colour
                                     # the robot sees it in (default: every part, in task order)
+    reach_gap: [0.5, 2.0]           # seconds the person waits between reaches, min and max (default [2, 8])
 
 Every key is checked before the world is built, and a wrong one is named with its line.
 """
@@ -29,7 +30,7 @@ from sim.errors import SimInputError, TaskFileError
 from sim.parts.source import MeshPart
 from sim.world.config import RESTING, WorldConfig
 
-TASK_KEYS = ("workpieces", "camera_height", "camera_tilt_deg", "resting", "min_gap", "pick")
+TASK_KEYS = ("workpieces", "camera_height", "camera_tilt_deg", "resting", "min_gap", "pick", "reach_gap")
 MESH_KEYS = ("mesh", "units", "name", "count", "color", "density", "place")
 _EXAMPLE = "see tasks/demo.yaml and tasks/printed_parts.yaml"
 
@@ -76,6 +77,8 @@ def load_task(path) -> Task:
                             f"got {resting!r}")
     if "pick" in spec:
         options["pick"] = _pick(path, spec)
+    if "reach_gap" in spec:
+        options["reach_gap_s"] = _reach_gap(path, spec)
     try:
         return Task(path, WorldConfig(workpieces=names, mesh_parts=meshes, resting=resting, **options))
     except SimInputError as exc:  # a value out of range, or a part listed twice: this file's fault
@@ -123,6 +126,15 @@ def _pick(path: Path, spec: _Lined) -> tuple[str, ...]:
         raise TaskFileError(path, f"line {spec.lines['pick']}: pick must be a list of parts, each optionally after "
                             f"its colour, as in [red idler, chassis]; got {spec['pick']!r}")
     return tuple(pick)
+
+
+def _reach_gap(path: Path, spec: _Lined) -> tuple[float, float]:
+    gap = spec["reach_gap"]
+    if not isinstance(gap, list) or len(gap) != 2 or not all(
+            isinstance(g, (int, float)) and not isinstance(g, bool) for g in gap) or not 0 < gap[0] <= gap[1]:
+        raise TaskFileError(path, f"line {spec.lines['reach_gap']}: reach_gap must be [min, max] seconds between "
+                            f"the person's reaches, with 0 < min <= max, such as [0.5, 2.0]; got {gap!r}")
+    return float(gap[0]), float(gap[1])
 
 
 def _workpieces(path: Path, spec: _Lined) -> tuple[tuple[str, ...], tuple[MeshPart, ...]]:

@@ -61,6 +61,6 @@ def test_a_plan_without_a_goal_or_its_task_is_refused(folder):
 
 
 def test_the_shipped_plans_read():
-    for name in ("kit", "red_hub", "sort"):
+    for name in ("kit", "red_hub", "sort", "busy_person"):
         plan = load_plan(REPO / "tasks" / "plans" / f"{name}.yaml")
         assert plan.goal

@@ -1,5 +1,7 @@
 """Task files naming catalog parts and users' meshes (sim/world/tasks.py): every key checked, with its line."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 import trimesh
@@ -7,6 +9,8 @@ import trimesh
 from sim.errors import TaskFileError
 from sim.parts.source import MeshPart
 from sim.world.tasks import MESH_KEYS, TASK_KEYS, load_task
+
+REPO = Path(__file__).resolve().parents[3]
 
 
 @pytest.fixture
@@ -57,6 +61,8 @@ def test_a_name_replaces_the_file_stem(folder):
     ("workpieces:\n  - mesh: parts/block.stl\n    name: chassis\n", 2, "is a catalog part's"),
     ("workpieces: [chassis]\nresting: sideways\n", 2, "resting must be one of upright, any"),
     ("workpieces: [chassis]\nmin_gap: wide\n", 2, "min_gap must be a number"),
+    ("workpieces: [chassis]\nreach_gap: [2, 1]\n", 2, "reach_gap must be [min, max] seconds"),
+    ("workpieces: [chassis]\nreach_gap: 1\n", 2, "reach_gap must be [min, max] seconds"),
 ])
 def test_each_bad_key_is_named_with_its_line(folder, text, line, words):
     with pytest.raises(TaskFileError) as caught:
@@ -88,15 +94,17 @@ def test_a_negative_gap_and_a_part_twice_are_refused(folder):
 
 
 def test_the_shipped_colour_pick_task_reads():
-    from pathlib import Path
-
-    task = load_task(Path(__file__).resolve().parents[3] / "tasks" / "colour_pick.yaml")
+    task = load_task(REPO / "tasks" / "colour_pick.yaml")
     assert task.world.pick == ("red hub",) and task.world.mesh_parts[0].count == 2
 
 
-def test_the_shipped_demo_task_still_reads():
-    from pathlib import Path
+def test_the_busy_person_task_makes_the_person_reach_more_often():
+    busy = load_task(REPO / "tasks" / "busy_person.yaml").world
+    assert busy.reach_gap_s == (0.5, 2.0)
+    assert busy.reach_gap_s[1] <= load_task(REPO / "tasks" / "demo.yaml").world.reach_gap_s[0]
 
-    task = load_task(Path(__file__).resolve().parents[3] / "tasks" / "demo.yaml")
+
+def test_the_shipped_demo_task_still_reads():
+    task = load_task(REPO / "tasks" / "demo.yaml")
     assert task.world.workpieces == ("u_channel", "chassis", "transformer", "flanged_hub")
     assert task.world.mesh_parts == () and np.isclose(task.world.gap, 0.02)
