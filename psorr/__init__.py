@@ -12,7 +12,7 @@ from psorr.acceptance.params import AcceptParams
 from psorr.decomposition import DecomposeParams, Decomposition, decompose
 from psorr.decomposition.detail import DetailParams
 from psorr.decomposition.support_crop import SupportCropParams
-from psorr.errors import CloudFileError, InvalidInputError, PsorrError
+from psorr.errors import CloudFileError, InvalidInputError, MissingExtraError, PsorrError
 from psorr.hypotheses.orr import OrrParams
 from psorr.hypotheses.outline import OutlineParams
 from psorr.hypotheses.pairs import PairParams
@@ -42,6 +42,7 @@ __all__ = [
     "DetailParams",
     "InvalidInputError",
     "Method",
+    "MissingExtraError",
     "ModelLibrary",
     "OrientedBox",
     "OrrParams",

@@ -51,6 +51,25 @@ def _log(message: str) -> None:
     print(message, file=sys.stderr, flush=True)
 
 
+RERUN_HELP = ("record every stage for the Rerun viewer into OUT.rrd (without a file: stream to a viewer spawned "
+              "now); needs pip install 'psorr[viz]'")
+
+
+def rerun_logger(path: str | None):
+    """The RerunLogger of a --rerun option (None without one), made before the work so that a missing extra or
+    an unwritable file is told at once."""
+    if path is None:
+        return None
+    from psorr.viz.rerun_log import RerunLogger
+
+    if path:
+        check_output(path, "--rerun", ".rrd")
+    logger = RerunLogger(path or None)
+    if path:
+        _log(f"recording to {path}")
+    return logger
+
+
 def _recognize(args) -> int:
     from tqdm import tqdm
 
@@ -61,6 +80,7 @@ def _recognize(args) -> int:
 
     # The outputs and the scene first: a wrong path should not wait for a new library to train.
     check_output(args.png, "--png", ".png")
+    logger = rerun_logger(args.rerun)
     cloud = read_cloud(args.scene)
     require_seen_from_origin(cloud, str(args.scene))
     library = library_from_arguments(args.models, units=args.units,
@@ -68,7 +88,9 @@ def _recognize(args) -> int:
     _log(f"read {args.scene}: {len(cloud)} points; models {', '.join(library.names)}")
     params = RecognizeParams().for_stacked_parts() if args.stacked else RecognizeParams()
     recognizer = Recognizer(library, method=args.method, params=params, use_colour=args.colour)
-    result = recognizer.recognize(cloud, np.random.default_rng(args.seed))
+    result = recognizer.recognize(cloud, np.random.default_rng(args.seed), observer=logger)
+    if logger is not None:
+        logger.close()
     stats = result.stats
     if args.png:
         from psorr.viz.render import save_detections_png
@@ -115,6 +137,7 @@ def build_parser() -> argparse.ArgumentParser:
                      help=f"working resolution in metres (default {DEFAULT_VOXEL_SIZE}), from 0.001 to 0.1; "
                           "time grows about as its inverse square: minutes for a 640x480 cloud at 0.002")
     dec.add_argument("--seed", type=seed, default=0, help="seed of the RANSAC sampling (default 0)")
+    dec.add_argument("--rerun", nargs="?", const="", metavar="OUT.rrd", help=RERUN_HELP)
     dec.set_defaults(run=decompose_command)
     seg = sub.add_parser("segment", help="split the objects on the table of a cloud by colour and distance")
     seg.add_argument("cloud", help="cloud file: .pcd, .ply, .xyz/.txt or .npy, metres, sensor frame")
@@ -138,6 +161,7 @@ def build_parser() -> argparse.ArgumentParser:
     rec.add_argument("--json", action="store_true", help="print exactly one JSON line to stdout")
     rec.add_argument("--png", metavar="OVERLAY.png", help="draw the recognised models over the cloud")
     rec.add_argument("--seed", type=seed, default=0)
+    rec.add_argument("--rerun", nargs="?", const="", metavar="OUT.rrd", help=RERUN_HELP)
     rec.add_argument("--stacked", action="store_true",
                      help="parts may lie on other objects or sit flush with them: no limit on how high a part "
                           "floats over the table, and no continuation check (by default a part whose faces "

@@ -40,8 +40,10 @@ def _write_labels(path: str | None, labels: np.ndarray) -> None:
 
 def decompose_command(args) -> int:
     """psorr decompose: print (or --json) the primitives and shape graph of a cloud."""
+    from psorr.cli import rerun_logger  # here: psorr.cli imports this module
     from psorr.decomposition import DecomposeParams, decompose
 
+    logger = rerun_logger(args.rerun)  # first: a missing extra is told before the cloud is read
     cloud = _labelling_input(args)
     params = DecomposeParams() if args.voxel_size is None else DecomposeParams(voxel_size=args.voxel_size)
     try:
@@ -50,6 +52,11 @@ def decompose_command(args) -> int:
         # Too few points, or too few voxels at this size: a problem of this file, so it is named.
         raise CloudFileError(args.cloud, str(exc).replace("voxel_size", "--voxel-size")) from None
     graph = result.graph
+    if logger is not None:
+        with logger:
+            logger.cloud(cloud)
+            logger.decomposition("scene", cloud, result)
+            logger.stage_ms("decomposition", result.stats.total_ms)
     _write_labels(args.out, result.labels)
     if args.png:
         from psorr.viz.render import save_decomposition_png

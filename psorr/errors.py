@@ -28,3 +28,7 @@ class CloudFileError(PsorrError):
 
 class AssetError(CloudFileError):
     """A file of psorr's package data (the workpiece catalog, a mesh, a collision mesh, the robot MJCF) is missing."""
+
+
+class MissingExtraError(PsorrError, ImportError):
+    """An optional feature's library is not installed. The message names the extra that installs it."""

@@ -44,14 +44,14 @@ from psorr.library.models import ModelLibrary
 from psorr.library.orr_table import OrrTable
 from psorr.library.ppf import scene_oriented_points
 from psorr.recognize_params import Method, Recognition, RecognitionStats, RecognizeParams
-from psorr.segment.per_segment import coloured, segment_clouds
-from psorr.segment.pipeline import SegmentParams, segment
+from psorr.segment.per_segment import search_per_segment
 from psorr.sensing.resolution import thin_to_focal
 from psorr.types import Detection, PointCloud, PrimitiveKind
 from psorr.verification.scene_view import SceneView
+from psorr.viz.observer import RecognitionObserver, observed_by
+from psorr.viz.observer import observer as current_observer
 
 _NONE_KNOWN = CandidateSet()  # no earlier look's detections to follow
-_BY_COLOUR_AND_DISTANCE = SegmentParams(crease_noise=None)
 _TABLE_EXTENT = 1.2  # in diameters of the largest model: a primitive larger than this is the table
 
 
@@ -95,7 +95,7 @@ class Recognizer:
         self.orr_table = OrrTable.for_library(library, p.orr.table) if self.method is Method.ORR else None
 
     def recognize(self, cloud: PointCloud, rng: np.random.Generator | None = None,
-                  known: Sequence[Detection] = ()) -> Recognition:
+                  known: Sequence[Detection] = (), observer: RecognitionObserver | None = None) -> Recognition:
         """The library's models found in ``cloud`` (metres, sensor frame, seen from the origin; an image or
         unorganised points). Returns a Recognition: the detections in the order they were accepted (by
         score within each search round), each with model name, ``T_cloud_model`` (4, 4), score in [0, 1]
@@ -105,7 +105,17 @@ class Recognizer:
 
         ``known``: detections an earlier look of the same sensor found (PSORR and PSG, without colour). Each is
         judged again from its pose, and the search looks only at what they no longer explain
-        (:mod:`psorr.acceptance.known`): a cell that looks again after each pick recognises what moved."""
+        (:mod:`psorr.acceptance.known`): a cell that looks again after each pick recognises what moved.
+
+        ``observer``: gets every stage as it happens (:class:`psorr.viz.RerunLogger` records them for Rerun)."""
+        with observed_by(observer) as watcher:
+            result = self._recognize(cloud, rng, known)
+            watcher.detections(result.detections, self.library)
+            for stage, ms in (("decomposition", result.stats.decomposition_ms), ("total", result.stats.total_ms)):
+                watcher.stage_ms(stage, ms)
+        return result
+
+    def _recognize(self, cloud: PointCloud, rng, known: Sequence[Detection]) -> Recognition:
         if not isinstance(cloud, PointCloud):
             raise InvalidInputError(f"recognize() takes a psorr.PointCloud, got {type(cloud).__name__}")
         known = known_candidates(self.library, known)
@@ -117,33 +127,20 @@ class Recognizer:
         rng = random_generator(rng, "recognize()")
         start = time.perf_counter()
         cloud = self._at_sensor_sampling(cloud)
+        current_observer().cloud(cloud)
         if not cloud.valid_mask.any():  # a frame the sensor measured nothing in (the arm over its lens): none here
             return Recognition((), RecognitionStats(self.method, 0, 0.0, 0.0, 0.0, self.library.train_ms))
-        if self.use_colour:
-            return self._per_segment(cloud, rng, start)
-        found = self._find(cloud, rng, known)
+        found = search_per_segment(self._find, cloud, rng) if self.use_colour else self._find(cloud, rng, known)
         return Recognition(found.detections, self._stats(found, start))
 
     def _find(self, cloud: PointCloud, rng: np.random.Generator, known: CandidateSet = _NONE_KNOWN) -> SearchResult:
         view = SceneView(cloud)
+        current_observer().table(view.support_plane)
         if self.method is Method.ORR:
             return self._orr(view, rng)
         tally = self._new_tally(view)
         self._single_search(view, tally, known)
         return self._decomposed_search(cloud, view, rng, tally)
-
-    def _per_segment(self, cloud: PointCloud, rng: np.random.Generator, start: float) -> Recognition:
-        """Segment by colour and distance, recognise each segment alone, and give each detection its
-        segment's colour (psorr.segment). Segments are not split at creases: the models explain the
-        geometry themselves, and a concave part (a bracket, a channel) would fall into pieces."""
-        detections, results = [], []
-        for seg, alone in segment_clouds(cloud, segment(cloud, _BY_COLOUR_AND_DISTANCE, rng)):
-            results.append(self._find(alone, rng))
-            detections += [coloured(d, seg) for d in results[-1].detections]
-        total = SearchResult(tuple(detections), *(sum(getattr(r, name) for r in results) for name in
-                                                  ("hypotheses", "verify_ms", "decomposition_ms", "qpbo_nodes",
-                                                   "qpbo_unlabelled")))
-        return Recognition(total.detections, self._stats(total, start))
 
     def refine(self, cloud: PointCloud, model: str, T_cloud_model: np.ndarray) -> Detection:
         """Judge a known pose of ``model`` in a new view, as recognition judges its candidates: ICP from
@@ -200,6 +197,7 @@ class Recognizer:
             return tally.result()
         scene = decompose_with_leftovers(cropped, self.scene_decompose, p.detail.leftover_voxel, rng)
         tally.decomposition_ms += (time.perf_counter() - t0) * 1e3
+        current_observer().decomposition("scene", cloud, scene)
         if scene is None:  # too sparse to decompose: nothing to find (as ORR says)
             return tally.result()
         self._search(cloud, view, scene, tally)
@@ -233,6 +231,7 @@ class Recognizer:
         left = crop_to_parts(left, view.support_plane, margin, p.support_crop)
         fine = decompose_with_leftovers(left, replace(self.scene_decompose, voxel_size=p.detail.fine_voxel), None, rng)
         tally.decomposition_ms += (time.perf_counter() - t0) * 1e3
+        current_observer().decomposition("detail", cloud, fine)
         if fine is not None:
             self._search(cloud, view, fine, tally)
 

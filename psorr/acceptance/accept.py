@@ -25,6 +25,7 @@ from psorr.library.models import Model, ModelLibrary
 from psorr.types import Detection
 from psorr.verification.point_check import CheckParams, PoseCheck, check_pose
 from psorr.verification.scene_view import SceneView
+from psorr.viz.observer import observer, watched
 
 _COARSE = CheckParams(max_points=300)  # the coarse fit's point check: enough to tell the hopeless candidates
 _COARSE_ITERATIONS, _COARSE_POINTS = 15, 1000  # the coarse ICP's, as above
@@ -65,6 +66,7 @@ class Acceptance:
         shares more than max_shared_pixels of its pixels with earlier detections is dropped, unless it scores
         higher, when it displaces them. Poses from one cylinder (``beyond``) must also be supported off the
         model's long cylinders."""
+        observer().candidates(tuple(candidates), self.library)
         fitted = [f for c in candidates if (f := self.fit(view, c, beyond)) is not None]
         fitted.sort(key=lambda f: -f.check.score)
         return self._settle(view, fitted, claims)
@@ -77,14 +79,18 @@ class Acceptance:
         """The candidate fitted (coarse, then fine ICP) and point-checked, or None when it fails a bar."""
         model = self.library.models[candidate.model]
         T, coarse = self._coarse_fit(view, model, candidate.T_cloud_model)
-        if self._hopeless(coarse):
+        failed = self._hopeless(coarse)
+        if failed is None:
+            T = self._fine_icp(view, model, T)
+            check = check_pose(view, model.points, model.normals, T, self.params.check)
+            failed = self._failed_bar(view, model, T, check)
+        if failed is None and beyond is not None and not beyond.seen_beyond(
+                view, candidate.model, T, self.params.check, self.params.max_violation_ratio):
+            failed = "not seen beyond the cylinder it was found from"
+        if failed is not None:
+            observer().rejected(model.name, T, failed)
             return None
-        T = self._fine_icp(view, model, T)
-        check = check_pose(view, model.points, model.normals, T, self.params.check)
-        passes = self._passes(view, model, T, check) and (
-            beyond is None or beyond.seen_beyond(view, candidate.model, T, self.params.check,
-                                                 self.params.max_violation_ratio))
-        return Fitted(model, T, check) if passes else None
+        return Fitted(model, T, check)
 
     def _coarse_icp(self, view, model, T):
         return refine_icp(view, model.points, model.normals, T, self.params.icp_distance,
@@ -104,28 +110,34 @@ class Acceptance:
         best = max(range(len(fits)), key=lambda k: checks[k].score)
         return fits[best], checks[best]
 
-    def _hopeless(self, coarse: PoseCheck) -> bool:
-        """Too little of the model measured after the coarse fit (of its surface, and of what nearer ones
-        leave in view), or too much of it seen through."""
+    def _hopeless(self, coarse: PoseCheck) -> str | None:
+        """Why the coarse fit gives the candidate up: too little of the model measured (of its surface, and of
+        what nearer ones leave in view), or too much of it seen through; None when it goes on."""
         p = self.params
-        unseen = (coarse.visible_fraction < p.min_visible_fraction / 2
-                  and coarse.unblocked_fraction < p.min_unblocked_fraction / 2)
-        return unseen or coarse.violation_ratio > self.coarse_max_violation
+        if (coarse.visible_fraction < p.min_visible_fraction / 2
+                and coarse.unblocked_fraction < p.min_unblocked_fraction / 2):
+            return f"coarse fit: {coarse.visible_fraction:.0%} of it seen"
+        if coarse.violation_ratio > self.coarse_max_violation:
+            return f"coarse fit: {coarse.violation_ratio:.0%} of it seen through"
+        return None
 
     def _fine_icp(self, view, model, T):
         p = self.params
         return refine_icp(view, model.points, model.normals, T, p.icp_distance / 3, max_points=p.icp_points)
 
-    def _passes(self, view: SceneView, model: Model, T: np.ndarray, check: PoseCheck) -> bool:
-        """Does the fitted pose clear the bars: seen enough, supported enough (above the table too), not
-        seen through, and resting on the supporting plane rather than floating over it?"""
+    def _failed_bar(self, view: SceneView, model: Model, T: np.ndarray, check: PoseCheck) -> str | None:
+        """The first bar the fitted pose fails, or None when it clears them all: seen enough, supported enough
+        (above the table too), not seen through, and resting on the supporting plane rather than floating."""
         p = self.params
-        seen_enough = (check.visible_fraction >= p.min_visible_fraction
-                       or check.unblocked_fraction >= p.min_unblocked_fraction)
-        enough_support = (check.n_support >= p.min_support
-                          and check.n_support_above_table >= p.min_support_above_table)
-        return (enough_support and seen_enough and check.violation_ratio <= p.max_violation_ratio
-                and not floats_above(view.support_plane, model.points[::4], T, p.max_float))
+        if check.n_support < p.min_support or check.n_support_above_table < p.min_support_above_table:
+            return f"{check.n_support} points support it ({check.n_support_above_table} above the table)"
+        if check.visible_fraction < p.min_visible_fraction and check.unblocked_fraction < p.min_unblocked_fraction:
+            return f"{check.visible_fraction:.0%} of it seen"
+        if check.violation_ratio > p.max_violation_ratio:
+            return f"{check.violation_ratio:.0%} of it seen through"
+        if floats_above(view.support_plane, model.points[::4], T, p.max_float):
+            return "floats above the table"
+        return None
 
     def _resolved(self, view: SceneView, model: Model, T: np.ndarray) -> Detection:
         """The detection at ``T``, or at the near-symmetric twin the view prefers, with those it left open."""
@@ -142,11 +154,17 @@ class Acceptance:
             if claim is None or on_larger_object(view, f.model.points, f.model.normals,
                                                  claim.detection.T_cloud_model, self.params.max_continued,
                                                  self.params.continuation):
+                observer().rejected(f.model.name, f.T_cloud_model, "its pixels are a better detection's" if claim
+                                    is None else "part of a larger object")
                 continue
             c = claim.check
             claims.add(claim.detection, c.supported_blocks, c.score, claim.displaced, 1 - c.violation_ratio)
             accepted.append(claim.detection)
         standing = {id(d) for d in claims.detections}
+        if watched():
+            for d in accepted:
+                if id(d) not in standing:
+                    observer().rejected(d.model, d.T_cloud_model, "displaced by a better detection")
         return [d for d in accepted if id(d) in standing]
 
     def _claim(self, view: SceneView, f: Fitted, claims: PixelClaims, resolved_from: list) -> Claim | None:

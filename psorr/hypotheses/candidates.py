@@ -10,10 +10,13 @@ import numpy as np
 @dataclass(frozen=True, eq=False)
 class Candidate:
     """One screened pose hypothesis: the library's ``model`` (an index into ``ModelLibrary.models``) at
-    ``T_cloud_model`` (4, 4), mapping model coordinates (metres) into the cloud's frame."""
+    ``T_cloud_model`` (4, 4), mapping model coordinates (metres) into the cloud's frame, and the score its
+    screening gave it (the bounding-box fitness of pairs and cliques, the coarse point check's of single
+    primitives), or None when its source scores none."""
 
     model: int
     T_cloud_model: np.ndarray
+    score: float | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -29,6 +32,9 @@ class CandidateSet:
         return len(self.candidates)
 
     @classmethod
-    def chosen(cls, models: np.ndarray, poses: np.ndarray, order, hypotheses: int, verify_ms: float) -> CandidateSet:
-        """The candidates ``order`` picks (indices into ``models`` (K,) and ``poses`` (K, 4, 4)), in that order."""
-        return cls(tuple(Candidate(int(models[k]), poses[k]) for k in order), hypotheses, verify_ms)
+    def chosen(cls, models: np.ndarray, poses: np.ndarray, order, hypotheses: int, verify_ms: float,
+               scores: np.ndarray | None = None) -> CandidateSet:
+        """The candidates ``order`` picks (indices into ``models`` (K,), ``poses`` (K, 4, 4) and their screening
+        ``scores`` (K,), if any), in that order."""
+        return cls(tuple(Candidate(int(models[k]), poses[k], None if scores is None else float(scores[k]))
+                         for k in order), hypotheses, verify_ms)

@@ -77,7 +77,7 @@ class PairCandidates:
         order = np.argsort(-scores, kind="stable")
         order = share_out(order[scores[order] >= p.min_box_score], models, p.refine_top)
         verify_ms = (time.perf_counter() - t1) * 1e3
-        return CandidateSet.chosen(models, poses, order, len(poses), verify_ms)
+        return CandidateSet.chosen(models, poses, order, len(poses), verify_ms, scores)
 
     def _plausible(self, scene_prims, i, j, scene_index, rows):
         """The lookup matches whose scene primitives could be parts of their model primitives (kind, size)."""

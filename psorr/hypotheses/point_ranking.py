@@ -46,4 +46,4 @@ def ranked_by_point_check(view, models, poses: np.ndarray, owners: np.ndarray, c
     order = np.argsort(-scores, kind="stable")
     order = share_out(order[scores[order] >= min_score], owners, top)
     verify_ms = (time.perf_counter() - t1) * 1e3
-    return CandidateSet.chosen(owners, poses, order, len(poses), verify_ms)
+    return CandidateSet.chosen(owners, poses, order, len(poses), verify_ms, scores)

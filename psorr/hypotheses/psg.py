@@ -110,8 +110,8 @@ class PsgMatcher:
         order = kept[np.argsort(-scores[kept], kind="stable")]
         order = share_out(_distinct(order, found.poses, found.models, self.params), found.models, self.params.top)
         verify_ms = (time.perf_counter() - start) * 1e3
-        return PsgCandidates(CandidateSet.chosen(found.models, found.poses, order, len(found.poses), verify_ms),
-                             n_nodes, n_unlabelled)
+        chosen = CandidateSet.chosen(found.models, found.poses, order, len(found.poses), verify_ms, scores)
+        return PsgCandidates(chosen, n_nodes, n_unlabelled)
 
     def _hypotheses(self, graph: PrimitiveShapeGraph, max_extent: float) -> _Hypotheses:
         graph, table = _table_turned_over(graph, max_extent)

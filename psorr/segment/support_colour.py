@@ -39,6 +39,21 @@ def supported_colour(cloud: PointCloud, detection: Detection, model, params: Che
                                 "pass library.model(detection.model)")
     if cloud.colors is None:
         return None
+    on = supporting_points(cloud, detection, model, params)
+    if len(on) == 0:
+        return None
+    colours = np.asarray(cloud.colors, dtype=np.float64)[on]
+    lightness = rgb_to_lab(colours)[:, 0]
+    lit = colours[lightness >= np.quantile(lightness, 1.0 - LIT_SHARE)]
+    rgb = np.median(lit, axis=0)
+    return DetectionColour(colour_name(rgb), tuple(float(v) for v in rgb))
+
+
+def supporting_points(cloud: PointCloud, detection: Detection, model, params: CheckParams | None = None
+                      ) -> np.ndarray:
+    """Indices (K,) into ``cloud.points`` of the points on ``detection``'s model surface at its pose: within
+    the point check's depth tolerance at their depth (``params``, default ``CheckParams()``) of the posed
+    model's samples, widened by the samples' own spacing."""
     params = CheckParams() if params is None else params
     T = detection.T_cloud_model
     surface = model.points @ T[:3, :3].T + T[:3, 3]
@@ -49,17 +64,9 @@ def supported_colour(cloud: PointCloud, detection: Detection, model, params: Che
         near = np.all((points >= surface.min(axis=0) - reach) & (points <= surface.max(axis=0) + reach), axis=1)
     index = np.flatnonzero(near)
     if len(index) == 0:
-        return None
+        return index
     distance, _ = cKDTree(surface).query(points[index], distance_upper_bound=reach)
-    tolerance = depth_tolerance(points[index, 2], params) + spacing
-    on = index[distance <= tolerance]
-    if len(on) == 0:
-        return None
-    colours = np.asarray(cloud.colors, dtype=np.float64)[on]
-    lightness = rgb_to_lab(colours)[:, 0]
-    lit = colours[lightness >= np.quantile(lightness, 1.0 - LIT_SHARE)]
-    rgb = np.median(lit, axis=0)
-    return DetectionColour(colour_name(rgb), tuple(float(v) for v in rgb))
+    return index[distance <= depth_tolerance(points[index, 2], params) + spacing]
 
 
 def _spacing(samples: np.ndarray) -> float:
