@@ -98,6 +98,7 @@ def _perceive(args) -> int:
 def _run(args) -> int:
     from tqdm import tqdm
 
+    from sim.control.recorder_hooks import combined
     from sim.episode import run_episode
     from sim.world import build_world
     from sim.world.tasks import load_task
@@ -109,17 +110,23 @@ def _run(args) -> int:
                         file=sys.stderr):
         rng = np.random.default_rng([args.seed, episode])
         world = build_world(task.world, rng)
-        recorder = None
+        recorder = rerun = None
         if args.record:
             from sim.recording.recorder import EpisodeRecorder
 
             recorder = EpisodeRecorder(Path(args.record), f"episode_{args.seed}_{episode}")
+        if args.rerun is not None:
+            from sim.recording.rerun_episode import recorder_for_option
+
+            rerun = recorder_for_option(args.rerun, episode if args.episodes > 1 else None)
         try:
-            result = run_episode(world, rng, poses=args.poses, occluder=occluder, recorder=recorder)
+            result = run_episode(world, rng, poses=args.poses, occluder=occluder, recorder=combined(recorder, rerun))
         finally:  # an unfinished MP4 would leave its ffmpeg process running
             if recorder is not None:
                 for path in recorder.close():
                     _log(f"wrote {path}")
+            if rerun is not None:
+                rerun.close()
         results.append(result)
         rows += [(episode, p) for p in result.picks]
     summary = summarize(results, args.episodes)
@@ -238,6 +245,9 @@ def build_parser() -> argparse.ArgumentParser:
                      help="a person reaches over the table now and then (default on); the robot waits for them")
     run.add_argument("--record", metavar="DIR",
                      help="write each episode's MP4 and a PNG contact sheet (views, recognised poses, grasps) here")
+    run.add_argument("--rerun", nargs="?", const="", metavar="OUT.rrd",
+                     help="record each episode for the Rerun viewer (OUT_<episode>.rrd for several; without a file: "
+                          "stream to a viewer spawned now); needs pip install 'psorr[viz]'")
     run.add_argument("--json", action="store_true", help="print one JSON line of summary figures")
     run.set_defaults(run=_run)
     plan = sub.add_parser("plan", help="plan and execute a process plan, binding its objects to recognised parts")

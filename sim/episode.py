@@ -28,7 +28,8 @@ from types import MappingProxyType
 import mujoco
 import numpy as np
 
-from sim.control.cell import ArmCell, Recorder
+from sim.control.cell import ArmCell
+from sim.control.recorder_hooks import Recorder
 from sim.errors import SimInputError, WorkspaceBlockedError
 from sim.modes import PoseSource, parse_mode
 from sim.people.human import ReachingHuman
@@ -201,6 +202,8 @@ class Episode:
         result = replace(result, looks=looks)
         self.remaining.remove(part)
         self.picks.append(result)
+        if self.recorder is not None:
+            self.recorder.picked(self.world, self.world.data, result)
         return result
 
     def give_up(self, why: str) -> None:

@@ -2,7 +2,8 @@
 steps the physics through ramped joint moves, tool paths and the gripper while the workspace monitor
 may stop it (:mod:`~sim.control.cell`)."""
 
-from sim.control.cell import ArmCell, Recorder, WorkspaceMonitor
+from sim.control.cell import ArmCell, WorkspaceMonitor
 from sim.control.ik import ArmIK, IKResult, T_world_site
+from sim.control.recorder_hooks import Recorder
 
 __all__ = ["ArmCell", "ArmIK", "IKResult", "Recorder", "T_world_site", "WorkspaceMonitor"]

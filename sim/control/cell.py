@@ -10,19 +10,16 @@ of the human's capsules, posed where they are at the time of the solve.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Protocol
+from typing import Protocol
 
 import mujoco
 import numpy as np
 
 from sim.control.ik import T_world_site, ik_for
+from sim.control.recorder_hooks import Recorder
 from sim.errors import UnreachableTargetError, WorkspaceBlockedError
 from sim.people.human import ReachingHuman
 from sim.world import World
-
-if TYPE_CHECKING:  # perception.py imports this module's users; only the annotations need these
-    from psorr.library.models import ModelLibrary
-    from sim.skills.perception import Look
 
 RAMP_S = 0.8  # s a move's joint-space ramp lasts
 SETTLE_S = 0.3  # s held at the goal after each move
@@ -39,19 +36,6 @@ class WorkspaceMonitor(Protocol):
     """Decides from the sensor alone whether someone is reaching over the table."""
 
     def occupied(self, data: mujoco.MjData, holding: str | None) -> bool: ...
-
-
-class Recorder(Protocol):
-    """Receives the episode as it happens (:class:`sim.recording.recorder.EpisodeRecorder` writes it to disk)."""
-
-    def tick(self, world: World, data: mujoco.MjData) -> None:
-        """After every physics step (the recorder decides which to keep)."""
-
-    def looked(self, world: World, data: mujoco.MjData, look: Look, library: ModelLibrary | None) -> None:
-        """After each look, with the model library (None for the oracle)."""
-
-    def grasped(self, world: World, data: mujoco.MjData, part: str) -> None:
-        """When the gripper has closed on ``part`` (before the lift tells whether the grasp holds)."""
 
 
 class ArmCell:
@@ -164,6 +148,8 @@ class ArmCell:
 
     def _protective_stop(self) -> None:
         self.protective_stops += 1
+        if self.recorder is not None:
+            self.recorder.stopped(self.world, self.data)
         start = self.data.time
         while self.monitor.occupied(self.data, self.holding):
             if self.data.time - start > MAX_STOP_S:

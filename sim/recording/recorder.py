@@ -27,6 +27,7 @@ import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
 from sim.control.ik import T_world_site
+from sim.control.recorder_hooks import Recorder
 from sim.devices.render_backend import ensure_headless_gl
 from sim.errors import RecordingError, SimInputError
 from sim.recording.sheet import ModelOverlay, SheetRow, height_shade, project_points, write_sheet
@@ -43,7 +44,7 @@ OVERVIEW_DISTANCE, OVERVIEW_ABOVE_TABLE = 1.5, 0.2  # m from the look-at point; 
 CLOSE_UP_ELEVATION, CLOSE_UP_DISTANCE = -15.0, 0.3  # deg; m from the tool site
 
 
-class EpisodeRecorder:
+class EpisodeRecorder(Recorder):
     """Writes ``directory/<name>.mp4`` and ``directory/<name>_sheet.png`` for one episode.
 
     Args:

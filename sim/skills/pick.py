@@ -147,6 +147,8 @@ def pick_and_place(world: World, part: str, T_world_part_estimate: np.ndarray,
     plan = plan_grasp(start.cell, part, start.T_est)
     if isinstance(plan, NoGrasp):
         return start.result(note=f"no reachable grasp: {plan.why}")
+    if start.cell.recorder is not None:
+        start.cell.recorder.planned(world, world.data, part, plan)
     seat = None
     try:
         approach(start, plan)
