@@ -1,4 +1,5 @@
-"""Rerun (``rerun-sdk``) is optional: imported only when a recording is asked for."""
+"""Rerun (``rerun-sdk``) is optional: imported only when a recording is asked for; and the recording stream
+that both the recognizer's and the simulator's recorders write to."""
 
 from __future__ import annotations
 
@@ -15,3 +16,39 @@ def import_rerun():
         raise MissingExtraError(f"recording for the Rerun viewer needs rerun-sdk, which is not installed: "
                                 f"{VIZ_EXTRA}") from None
     return rerun
+
+
+class RerunStream:
+    """A ``rerun.RecordingStream`` to log into: a new one writing ``path`` (an ``.rrd``), or streaming to a
+    viewer spawned here when ``path`` is None; or ``recording``, one the caller made and finishes. Use as a
+    context manager, or call :meth:`close`.
+
+    A new stream has no wall-clock or tick columns: the recorder's own timeline orders it, and the log times
+    could only be read back with pandas installed.
+    """
+
+    def __init__(self, application_id: str, path=None, recording=None):
+        self.rr = import_rerun()
+        self._own = recording is None
+        if recording is None:
+            recording = self.rr.RecordingStream(application_id)
+            recording.set_log_time_enabled(False)
+            recording.set_log_tick_enabled(False)
+            if path is not None:
+                recording.save(str(path))
+            else:
+                recording.spawn()
+        self.recording = recording
+
+    def close(self) -> None:
+        """Flush what is recorded to its file or viewer, and finish the file (a recording passed in is the
+        caller's to finish)."""
+        self.recording.flush()
+        if self._own:
+            self.recording.disconnect()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()

@@ -27,14 +27,14 @@ from __future__ import annotations
 import numpy as np
 
 from psorr.viz.observer import RecognitionObserver
-from psorr.viz.rerun_import import import_rerun
+from psorr.viz.rerun_import import RerunStream
 
 TABLE_BAND = 0.01  # m from the supporting plane: the points the table's box spans (display only)
 PLANE_RGB, CYLINDER_RGB = (70, 130, 220), (230, 120, 40)  # as the decomposition PNGs' kinds
 REJECTED_RGB, CANDIDATE_RGB, ALTERNATIVE_RGB = (200, 40, 40), (150, 150, 150), (240, 200, 0)
 
 
-class RerunLogger(RecognitionObserver):
+class RerunLogger(RecognitionObserver, RerunStream):
     """Records what a recognition does for the Rerun viewer; pass it as ``Recognizer.recognize(...,
     observer=logger)``.
 
@@ -45,31 +45,10 @@ class RerunLogger(RecognitionObserver):
     """
 
     def __init__(self, path=None, recording=None, prefix: str = "recognition"):
-        rr = import_rerun()
-        self.rr, self.prefix = rr, prefix.strip("/")
-        self._own = recording is None
-        if recording is None:
-            recording = rr.RecordingStream("psorr")
-            if path is not None:
-                recording.save(str(path))
-            else:
-                recording.spawn()
-        self.recording = recording
+        RerunStream.__init__(self, "psorr", path, recording)
+        self.prefix = prefix.strip("/")
         self._cloud = None
         self._step = self._round = 0
-
-    def close(self) -> None:
-        """Flush what is recorded to its file or viewer, and finish the file (a recording passed in is the
-        caller's to finish)."""
-        self.recording.flush()
-        if self._own:
-            self.recording.disconnect()
-
-    def __enter__(self) -> RerunLogger:
-        return self
-
-    def __exit__(self, *exc) -> None:
-        self.close()
 
     def _log(self, path: str, *archetypes) -> None:
         self.recording.set_time("stage", sequence=self._step)

@@ -24,7 +24,7 @@ import sys
 import mujoco
 import numpy as np
 
-from psorr.viz.rerun_import import import_rerun
+from psorr.viz.rerun_import import RerunStream
 from sim.control.recorder_hooks import Recorder
 from sim.world import World
 
@@ -32,7 +32,7 @@ VISUAL_GROUPS = (0, 1, 2)  # the cell's visual geoms; group 3 holds the collisio
 CLOUD_STRIDE = 2  # every this many pixels of a look's depth image, across and down
 
 
-class RerunEpisodeRecorder(Recorder):
+class RerunEpisodeRecorder(Recorder, RerunStream):
     """Records one episode for Rerun; hand it to :class:`sim.episode.Episode` as its ``recorder``.
 
     Args:
@@ -49,26 +49,9 @@ class RerunEpisodeRecorder(Recorder):
 
         if not fps > 0:
             raise SimInputError(f"fps must be > 0, got {fps}; the default is 20")
-        rr = import_rerun()
-        self.rr, self.fps, self._own = rr, float(fps), recording is None
-        if recording is None:
-            recording = rr.RecordingStream("psorr-sim")
-            recording.save(str(path)) if path is not None else recording.spawn()
-        self.recording = recording
-        self.steps = 0
+        RerunStream.__init__(self, "psorr-sim", path, recording)
+        self.fps, self.steps = float(fps), 0
         self._next_s, self._moving, self._picks, self._grasped = 0.0, None, 0, 0
-
-    def close(self) -> None:
-        """Flush the recording, and finish its file unless it was passed in."""
-        self.recording.flush()
-        if self._own:
-            self.recording.disconnect()
-
-    def __enter__(self) -> RerunEpisodeRecorder:
-        return self
-
-    def __exit__(self, *exc) -> None:
-        self.close()
 
     def _at(self, data: mujoco.MjData) -> None:
         self.recording.set_time("sim_time", duration=float(data.time))
