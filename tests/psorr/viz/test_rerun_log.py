@@ -8,7 +8,7 @@ import sys
 import numpy as np
 import pytest
 
-from psorr.errors import MissingExtraError
+from psorr.errors import InvalidInputError, MissingExtraError
 from psorr.io.clouds import write_cloud
 from psorr.library.models import ModelLibrary
 from psorr.recognize import Recognizer
@@ -48,13 +48,15 @@ def scene_and_library(tmp_path_factory):
     return scene, ModelLibrary.from_meshes([catalog[n].mesh_path for n in PARTS])
 
 
-class Decompositions(RecognitionObserver):
-    """Keeps the primitives and edges of each decomposition a recognition reports."""
+class CountingLogger(RerunLogger):
+    """A RerunLogger that also keeps the primitives and edges of each decomposition it records."""
 
-    def __init__(self):
+    def __init__(self, path):
+        super().__init__(path)
         self.shapes = {}
 
     def decomposition(self, name, cloud, scene):
+        super().decomposition(name, cloud, scene)
         if scene is not None:
             self.shapes[name] = (len(scene.graph.primitives), len(scene.graph.edges))
 
@@ -63,10 +65,8 @@ def test_a_recording_holds_each_stage_and_changes_no_detection(scene_and_library
     scene, library = scene_and_library
     recognizer = Recognizer(library)
     plain = recognizer.recognize(scene.cloud, np.random.default_rng(0))
-    seen = Decompositions()
-    recognizer.recognize(scene.cloud, np.random.default_rng(0), observer=seen)
-    with RerunLogger(tmp_path / "scene.rrd") as logger:
-        recorded = recognizer.recognize(scene.cloud, np.random.default_rng(0), observer=logger)
+    with CountingLogger(tmp_path / "scene.rrd") as seen:
+        recorded = recognizer.recognize(scene.cloud, np.random.default_rng(0), observer=seen)
     assert [(d.model, d.T_cloud_model.tolist()) for d in recorded.detections] == \
         [(d.model, d.T_cloud_model.tolist()) for d in plain.detections]
     assert sorted(d.model for d in plain.detections) == sorted(PARTS)
@@ -114,7 +114,7 @@ def test_without_rerun_the_option_is_one_line_naming_the_extra(tmp_path, monkeyp
 
 def test_an_observer_that_is_not_one_is_refused(scene_and_library):
     scene, library = scene_and_library
-    with pytest.raises(Exception, match="must be a psorr.viz.RecognitionObserver"):
+    with pytest.raises(InvalidInputError, match="must be a psorr.viz.RecognitionObserver"):
         Recognizer(library).recognize(scene.cloud, observer=print)
 
 
