@@ -8,6 +8,12 @@ from psorr.library.models import ModelLibrary
 from psorr.synthetic.catalog import DEFAULT_CATALOG
 
 
+def pytest_collection_modifyitems(config, items):
+    """Modules marked ``long`` first. make test hands whole modules to two workers in collection order; the
+    longest, collected last (tests/test_grasp_success.py), left one worker running alone at the end."""
+    items.sort(key=lambda item: item.get_closest_marker("long") is None)  # stable: modules stay whole
+
+
 @pytest.fixture(scope="module")
 def library(tmp_path_factory):
     """All 8 catalog parts (6+ models, as in the issue), trained into a fresh cache. A module that needs

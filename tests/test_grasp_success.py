@@ -13,6 +13,8 @@ from sim.episode import run_episode
 from sim.parts.source import MeshPart
 from sim.world import WorldConfig, build_world
 
+pytestmark = pytest.mark.long
+
 SEEDS = (0, 1, 2)
 CATALOG_PARTS = ("u_channel", "transformer", "flanged_hub")
 MIN_SUCCESS = 0.9
