@@ -242,3 +242,13 @@ def psg() -> str:
     verdicts = "\n".join(f"- {v}" for v in data["verdicts"])
     return table(["model", "planes", "cylinders", "PSORR found", "PSORR ms", "PSG found", "PSG false", "PSG ms",
                   "cliques alone found"], rows, "lrrrrrrrr") + "\n\n" + verdicts
+
+
+def rerun_overhead() -> str:
+    """benchmarks/rerun_overhead.py: what a Rerun recording adds to a recognition."""
+    d = load("rerun_overhead")
+    rows = [["plain", f"{d['plain_ms_median']:.0f}"], ["recorded (--rerun)", f"{d['recorded_ms_median']:.0f}"]]
+    return table(["", "median ms a scene"], rows, "lr") + (
+        f"\n\n{d['scenes']} scenes of the peers benchmark, 1 core: recording adds {d['added']:.1%} in all (target at "
+        f"most {d['target']:.0%}: {met(d['added'] <= d['target'])}); the same detections in {d['same_detections']}/"
+        f"{d['scenes']} scenes; recordings of {d['rrd_mb_median']:.1f} MB (median), {d['rrd_mb_max']:.1f} MB at most.")

@@ -83,7 +83,7 @@ TABLES = {
     "verify-compiled": recognition.verify_compiled, "verify-compiled-detail": recognition.verify_compiled_detail,
     "peers": recognition.peers, "peers-per-scene": recognition.peers_per_scene,
     "sensors": recognition.sensors, "density": recognition.density, "segment-osd": recognition.segment_osd,
-    "psg": recognition.psg,
+    "psg": recognition.psg, "rerun-overhead": recognition.rerun_overhead,
     **generalization.TABLES,
     "grasp-tolerance": cell.grasp_tolerance,
     "episodes": cell.episodes, "episodes-per-part": cell.episodes_per_part, "episodes-in-hand": cell.episodes_in_hand,
