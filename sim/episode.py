@@ -109,8 +109,9 @@ class Episode:
         recognizing = poses is PoseSource.RECOGNIZED
         rgb = recorder is not None if rgb is None else rgb
         colours = any(self.wanted_colour.values()) if colours is None else colours
+        watcher = recorder.recognition_observer() if recorder is not None else None
         self.perception = Perception(world, rng, recognize=recognizing, rgb=rgb, colours=colours,
-                                     params=perception) \
+                                     params=perception, observer=watcher) \
             if recognizing or occluder else None
         self.cell = ArmCell(world, human=human, monitor=self.perception if occluder else None, recorder=recorder)
         self.picks: list[PickResult] = []

@@ -41,24 +41,31 @@ class RerunLogger(RecognitionObserver, RerunStream):
     Args:
         path: the ``.rrd`` file to write, or None to stream to a viewer spawned here (``rerun`` installed).
         recording: log into this ``rerun.RecordingStream`` instead (path and spawning are then its own).
-        prefix: the entity path everything goes under.
+        prefix: the entity path everything goes under; each recognition first clears what the last one
+            logged there, so that a recording of several shows only the current one's.
+        log_cloud: log the input cloud (a recorder that logs the cloud itself, such as the simulator's, passes
+            False).
     """
 
-    def __init__(self, path=None, recording=None, prefix: str = "recognition"):
+    def __init__(self, path=None, recording=None, prefix: str = "recognition", log_cloud: bool = True):
         RerunStream.__init__(self, "psorr", path, recording)
-        self.prefix = prefix.strip("/")
+        self.prefix, self.log_cloud = prefix.strip("/"), log_cloud
         self._cloud = None
         self._step = self._round = 0
 
     def _log(self, path: str, *archetypes) -> None:
         self.recording.set_time("stage", sequence=self._step)
         self._step += 1
-        self.recording.log(f"{self.prefix}/{path}", *archetypes)
+        self.recording.log(f"{self.prefix}/{path}".rstrip("/"), *archetypes)
 
     # ---------------------------------------------------------------------------- what the stages report
 
     def cloud(self, cloud) -> None:
         self._cloud = cloud
+        if self._step:
+            self._log("", self.rr.Clear(recursive=True))
+        if not self.log_cloud:
+            return
         valid = cloud.valid_mask
         colours = None if cloud.colors is None else np.asarray(cloud.colors)[valid]
         self._log("cloud", self.rr.Points3D(cloud.points[valid], colors=colours, radii=0.001))

@@ -11,6 +11,7 @@ from sim.world import World
 
 if TYPE_CHECKING:  # perception.py imports this module's users; only the annotations need these
     from psorr.library.models import ModelLibrary
+    from psorr.viz.observer import RecognitionObserver
     from sim.skills.grasp_planning import GraspPlan
     from sim.skills.judging import PickResult
     from sim.skills.perception import Look
@@ -38,6 +39,10 @@ class Recorder(Protocol):
 
     def picked(self, world: World, data: mujoco.MjData, result: PickResult) -> None:
         """When a pick has ended, placed or not."""
+
+    def recognition_observer(self) -> RecognitionObserver | None:
+        """What watches each look's recognition, stage by stage (:class:`psorr.viz.RecognitionObserver`), or
+        None."""
 
 
 class Recorders(Recorder):
@@ -69,6 +74,9 @@ class Recorders(Recorder):
     def picked(self, world, data, result):
         for r in self.recorders:
             r.picked(world, data, result)
+
+    def recognition_observer(self):
+        return next((o for r in self.recorders if (o := r.recognition_observer()) is not None), None)
 
 
 def combined(*recorders: Recorder | None) -> Recorder | None:

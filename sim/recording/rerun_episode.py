@@ -9,6 +9,8 @@ Entity paths, under ``cell``:
 ``looks/cloud``                              each look's depth cloud in the world frame (every second pixel)
 ``looks/detections/<k>_<model>``             each look's detections: the model's mesh at the pose, its score
 ``looks/person``                             a look the person was in the way of
+``camera/recognition/...``                   each look's recognition, stage by stage, in the camera's frame
+                                             (:class:`psorr.viz.RerunLogger`'s entities, the cloud aside)
 ``grasp_plans/<part>``                       each grasp plan's tool poses: the grasp and the seat, as axes
 ``protective_stops``                         each time the monitor held the arm
 ``picks``                                    each pick's outcome, and ``grasp_success``, a running rate
@@ -52,11 +54,21 @@ class RerunEpisodeRecorder(Recorder, RerunStream):
         RerunStream.__init__(self, "psorr-sim", path, recording)
         self.fps, self.steps = float(fps), 0
         self._next_s, self._moving, self._picks, self._grasped = 0.0, None, 0, 0
+        self._recognition = None
 
     def _at(self, data: mujoco.MjData) -> None:
         self.recording.set_time("sim_time", duration=float(data.time))
 
     # ------------------------------------------------------------------------------------ Recorder protocol
+
+    def recognition_observer(self):
+        """A RerunLogger of each look's recognition into this recording, under ``cell/camera/recognition``."""
+        if self._recognition is None:
+            from psorr.viz.rerun_log import RerunLogger
+
+            self._recognition = RerunLogger(recording=self.recording, prefix="cell/camera/recognition",
+                                            log_cloud=False)
+        return self._recognition
 
     def tick(self, world: World, data: mujoco.MjData) -> None:
         if self._moving is None:
@@ -140,6 +152,8 @@ class RerunEpisodeRecorder(Recorder, RerunStream):
                                self.rr.Mesh3D(vertex_positions=vertices, triangle_indices=faces,
                                               albedo_factor=np.round(np.asarray(rgba) * 255).astype(np.uint8)),
                                static=True)
+        T = world.T_world_camera  # the recognizer's stages are in the camera's frame
+        self.recording.log("cell/camera", self.rr.Transform3D(translation=T[:3, 3], mat3x3=T[:3, :3]), static=True)
         for body in set(range(1, model.nbody)) - set(self._moving):
             self.recording.log(f"cell/bodies/{model.body(body).name}", self.rr.Transform3D(
                 translation=data.xpos[body], mat3x3=data.xmat[body].reshape(3, 3)), static=True)

@@ -89,6 +89,7 @@ class Perception:
         colours: name each detection's colour from the points that support it in the look's colour image (to
             pick a part by its colour); renders the colour image whatever ``rgb`` says.
         params: the recognizer method and the sensor's noise level (default: PSORR, the Kinect v1's noise).
+        observer: watches each look's recognition (:class:`psorr.viz.RecognitionObserver`), or None.
 
     Each look after the first gives PSORR the last recognised look's detections to follow (the camera stands
     still): they are judged again where they were, and only what they no longer explain is searched, so a
@@ -98,8 +99,9 @@ class Perception:
     """
 
     def __init__(self, world: World, rng: np.random.Generator, recognize: bool = True, rgb: bool = True,
-                 colours: bool = False, params: PerceptionParams | None = None):
+                 colours: bool = False, params: PerceptionParams | None = None, observer=None):
         self.world, self.rng, self.rgb, self.colours = world, rng, rgb or colours, colours
+        self.observer = observer
         self.params = params or PerceptionParams()
         self._noise = self.params.noise
         self.camera = DepthCamera(world.model, world.camera_name)
@@ -139,7 +141,8 @@ class Perception:
         detections, estimates = (), {}
         if self._recognizer is not None and not occupied:
             cloud = self._workspace_cloud(frame, world_pts, valid, self.ceiling)
-            detections = tuple(self._recognizer.recognize(cloud, self.rng, known=self._known).detections)
+            detections = tuple(self._recognizer.recognize(cloud, self.rng, known=self._known,
+                                                          observer=self.observer).detections)
             self._known = detections
             for det in detections:
                 if det.model in self.world.part_types.values():

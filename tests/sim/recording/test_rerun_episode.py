@@ -73,6 +73,15 @@ def test_looks_grasp_plans_stops_and_the_pick_are_there(recorded):
     assert len(rows.get("/cell/protective_stops", [])) == result.protective_stops
 
 
+def test_each_look_s_recognition_is_recorded_in_the_camera_frame(recorded):
+    _, _, result, rows, _ = recorded
+    assert rows["/cell/camera"][0]["Transform3D:translation"] is not None
+    boxes = rows["/cell/camera/recognition/decomposition/scene/boxes"]
+    assert 1 <= len(boxes) <= result.looks - result.occupied_looks  # a look after the pick may find all explained
+    assert any(p.startswith("/cell/camera/recognition/detections/") for p in rows)
+    assert "/cell/camera/recognition/cloud" not in rows  # the episode's own look logs the cloud
+
+
 def test_two_recorders_get_every_call():
     calls = []
 
