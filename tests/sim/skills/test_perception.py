@@ -69,8 +69,8 @@ def test_the_part_in_the_hand_is_not_an_intrusion(world, perception):
 def _recognizer_calls(perception):
     """The (cloud, known) of each call the looks make to PSORR, while in the block."""
     calls, recognize = [], perception._recognizer.recognize
-    perception._recognizer.recognize = lambda cloud, rng, known=(): calls.append((cloud, known)) or recognize(
-        cloud, rng, known=known)
+    perception._recognizer.recognize = lambda cloud, rng, known=(), observer=None: calls.append(
+        (cloud, known)) or recognize(cloud, rng, known=known, observer=observer)
     try:
         yield calls
     finally:
