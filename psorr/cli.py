@@ -55,6 +55,12 @@ RERUN_HELP = ("record every stage for the Rerun viewer into OUT.rrd (without a f
               "now); needs pip install 'psorr[viz]'")
 
 
+def rerun_target(path: str) -> Path | None:
+    """Where a --rerun option records: None to stream to a viewer (the option without a file), else the
+    ``.rrd`` file, checked to be writable before the work."""
+    return check_output(path, "--rerun", ".rrd") if path else None
+
+
 def rerun_logger(path: str | None):
     """The RerunLogger of a --rerun option (None without one), made before the work so that a missing extra or
     an unwritable file is told at once."""
@@ -62,11 +68,10 @@ def rerun_logger(path: str | None):
         return None
     from psorr.viz.rerun_log import RerunLogger
 
-    if path:
-        check_output(path, "--rerun", ".rrd")
-    logger = RerunLogger(path or None)
-    if path:
-        _log(f"recording to {path}")
+    target = rerun_target(path)
+    logger = RerunLogger(target)
+    if target is not None:
+        _log(f"recording to {target}")
     return logger
 
 

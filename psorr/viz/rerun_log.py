@@ -7,7 +7,7 @@ Entity paths, under ``prefix`` (default ``recognition``):
 =============================================  =====================================================
 ``cloud``                                      the cloud (its colours where it has them)
 ``table``                                      the supporting plane: a flat box over the points on it
-``decomposition/<pass>/points``                each primitive's inliers, coloured by kind as in the PNGs
+``decomposition/<pass>/points``                each primitive's inliers, in its colour in the PNGs
 ``decomposition/<pass>/boxes``                 one oriented box per primitive, labelled kind and id
 ``decomposition/<pass>/edges``                 the primitive shape graph: a line per edge
 ``candidates/round_<k>``                       one search round's candidates: their model's box, with
@@ -30,7 +30,6 @@ from psorr.viz.observer import RecognitionObserver
 from psorr.viz.rerun_import import RerunStream
 
 TABLE_BAND = 0.01  # m from the supporting plane: the points the table's box spans (display only)
-PLANE_RGB, CYLINDER_RGB = (70, 130, 220), (230, 120, 40)  # as the decomposition PNGs' kinds
 REJECTED_RGB, CANDIDATE_RGB, ALTERNATIVE_RGB = (200, 40, 40), (150, 150, 150), (240, 200, 0)
 
 
@@ -92,13 +91,14 @@ class RerunLogger(RecognitionObserver, RerunStream):
     def decomposition(self, name: str, cloud, scene) -> None:
         if scene is None:
             return
+        from psorr.viz.render import primitive_colors  # here: it loads matplotlib
+
         prims = scene.graph.primitives
-        kind_rgb = [PLANE_RGB if p.kind.value == "plane" else CYLINDER_RGB for p in prims]
+        kind_rgb = np.round(primitive_colors(scene.graph) * 255).astype(np.uint8)  # as `psorr decompose --png`
         labels = np.asarray(scene.labels)
         on = labels >= 0
         self._log(f"decomposition/{name}/points",
-                  self.rr.Points3D(cloud.points[on], colors=np.asarray(kind_rgb, dtype=np.uint8)[labels[on]],
-                                   class_ids=labels[on], radii=0.0015))
+                  self.rr.Points3D(cloud.points[on], colors=kind_rgb[labels[on]], class_ids=labels[on], radii=0.0015))
         self._log(f"decomposition/{name}/boxes", self.rr.Boxes3D(
             centers=[p.box.center for p in prims], half_sizes=[p.box.extent / 2 for p in prims],
             quaternions=_quaternions([p.box.rotation for p in prims]), colors=kind_rgb,

@@ -162,11 +162,11 @@ class RerunEpisodeRecorder(Recorder, RerunStream):
 def recorder_for_option(path: str, episode: int | None) -> RerunEpisodeRecorder:
     """The recorder of ``psorr-sim run --rerun [OUT.rrd]`` for one episode: a viewer spawned now without a file,
     else ``OUT.rrd``, or ``OUT_<episode>.rrd`` when ``episode`` is given (a run of several)."""
-    from psorr.cli import check_output
+    from psorr.cli import rerun_target
 
-    if not path:
+    out = rerun_target(path)
+    if out is None:
         return RerunEpisodeRecorder(None)
-    out = check_output(path, "--rerun", ".rrd")
     if episode is not None:
         out = out.with_name(f"{out.stem}_{episode}.rrd")
     print(f"recording to {out}", file=sys.stderr, flush=True)
