@@ -172,7 +172,8 @@ class Recognizer:
                                 found.qpbo_unlabelled)
 
     def _new_tally(self, view: SceneView) -> SearchTally:
-        return SearchTally(PixelClaims(view.n_blocks, self.params.acceptance.max_shared_pixels))
+        return SearchTally(PixelClaims(view.n_blocks, self.params.acceptance.max_shared_pixels,
+                                       self.acceptance.judge(view)))
 
     def _orr(self, view: SceneView, rng: np.random.Generator) -> SearchResult:
         tally = self._new_tally(view)

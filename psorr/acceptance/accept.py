@@ -18,6 +18,7 @@ from psorr.acceptance.claims import PixelClaims
 from psorr.acceptance.continuation import on_larger_object
 from psorr.acceptance.icp import refine_icp
 from psorr.acceptance.params import AcceptParams
+from psorr.acceptance.render_judge import RenderJudge
 from psorr.hypotheses.candidates import Candidate
 from psorr.hypotheses.pose_clusters import same_pose
 from psorr.hypotheses.single_cylinder import SingleCylinderMatcher
@@ -59,6 +60,11 @@ class Acceptance:
         # Built up front, as model preparation: found on a model's first detection instead, its
         # near-symmetries would add about 0.1 s to that scene.
         self.resolvers = {m.name: NearSymmetryResolver(m) for m in library.models}
+        self._spheres = {m.name: (m.points.mean(axis=0), 0.5 * m.diameter) for m in library.models}
+
+    def judge(self, view: SceneView) -> RenderJudge:
+        """The render-and-compare judge of conflicting detections in ``view`` (for :class:`PixelClaims`)."""
+        return RenderJudge(view, {name: r.renderer for name, r in self.resolvers.items()}, self._spheres)
 
     def __call__(self, view: SceneView, candidates, claims: PixelClaims,
                  beyond: SingleCylinderMatcher | None = None) -> list[Detection]:
@@ -173,14 +179,15 @@ class Acceptance:
         Only now, on the few survivors, is a dense check affordable: it tells a part from its near-symmetric
         twin pose (a tray turned end for end) by the small features."""
         c = f.check
-        displaced = claims.rivals(c.supported_blocks, c.score, 1 - c.violation_ratio)
+        posed = Detection(f.model.name, f.T_cloud_model, c.score)
+        displaced = claims.rivals(c.supported_blocks, c.score, 1 - c.violation_ratio, posed)
         if displaced is None and not self._second_chance(f, resolved_from):
             return None
         resolved_from.append((f.model, f.T_cloud_model))
         detection = self._resolved(view, f.model, f.T_cloud_model)
         if displaced is None:
             c = check_pose(view, f.model.points, f.model.normals, detection.T_cloud_model, self.params.check)
-            displaced = claims.rivals(c.supported_blocks, c.score, 1 - c.violation_ratio)
+            displaced = claims.rivals(c.supported_blocks, c.score, 1 - c.violation_ratio, detection)
             if displaced is None:
                 return None
         return Claim(detection, c, displaced)

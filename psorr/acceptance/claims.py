@@ -7,6 +7,10 @@ from the right one found later (the board, from its single face): the recognizer
 two detections that explain the same pixels, whichever came first. A detection found later that
 covers much of an earlier one's pixels conflicts with it too, although the earlier one holds little
 of its own: a bracket accepted on a chassis' wall, and the chassis found after it.
+
+Each conflict is put to the scene first, when a judge is given (:class:`~psorr.acceptance.render_judge.RenderJudge`):
+the detection whose render agrees clearly better with the measured depth stays. Only when the view cannot
+tell the two apart do the scores and pixel counts below decide.
 """
 
 from __future__ import annotations
@@ -31,12 +35,15 @@ class PixelClaims:
     when it explains more: more blocks, each weighted by its detection's score. Either way, a candidate
     that covers most of a detection's blocks also beats it by explaining clearly more blocks
     (_CLEARLY_MORE times), each weighted by how clean the detection is: the share of its checked
-    points that the sensor does not see through.
+    points that the sensor does not see through. With a ``judge`` (``prefer(model_a, T_a, model_b, T_b)``
+    giving 1, -1 or 0), its verdict on the candidate's pose against the rival's comes before all of these,
+    whenever it gives one.
     """
 
-    def __init__(self, n_blocks: int, max_shared: float):
+    def __init__(self, n_blocks: int, max_shared: float, judge=None):
         self.owner = np.full(n_blocks, -1, dtype=np.int64)  # index into _entries, -1 for none
         self.max_shared = max_shared
+        self.judge = judge
         self._entries: list[tuple[float, Detection, float] | None] = []  # score, detection, weight
         self._blocks: list[np.ndarray] = []  # each entry's supported blocks, held or not
 
@@ -45,10 +52,12 @@ class PixelClaims:
         """The detections that stand, in the order they were accepted."""
         return [e[1] for e in self._entries if e is not None]
 
-    def rivals(self, blocks: np.ndarray, score: float, clean: float | None = None) -> list[int] | None:
+    def rivals(self, blocks: np.ndarray, score: float, clean: float | None = None,
+               candidate: Detection | None = None) -> list[int] | None:
         """The detections a candidate with ``blocks`` (its supported blocks), ``score`` and ``clean`` (the
         share of its checked points not seen through; its score when None) must displace: [] if it
-        conflicts with none, None if it loses to one of them."""
+        conflicts with none, None if it loses to one of them. ``candidate`` (its model and pose) is what
+        the judge compares, if there is one."""
         blocks = np.unique(blocks)
         weight = _weight(score, clean, len(blocks))
         held = self.owner[blocks]
@@ -64,7 +73,9 @@ class PixelClaims:
                 if remaining <= self.max_shared * len(blocks):
                     break
                 rival = int(owners[k])
-                if not (self._entries[rival][0] < score
+                verdict = self._verdict(candidate, rival)
+                if verdict < 0 or verdict == 0 and not (
+                        self._entries[rival][0] < score
                         or self._covers(rival, covered) and self._explains_clearly_more(rival, weight)):
                     return None
                 displaced.append(rival)
@@ -78,10 +89,18 @@ class PixelClaims:
                 # more, blocks weighted by score, stays. By score alone a bracket posed on a chassis' wall
                 # (0.71 of it seen, 57 blocks) dropped the true chassis (0.48, 180 blocks) in a 1280x720 view.
                 explains_more = entry[0] * len(own) < score * len(blocks)
-                if not (explains_more or self._explains_clearly_more(rival, weight)):
+                verdict = self._verdict(candidate, rival)
+                if verdict < 0 or verdict == 0 and not (explains_more or self._explains_clearly_more(rival, weight)):
                     return None
                 displaced.append(rival)
         return displaced
+
+    def _verdict(self, candidate: Detection | None, rival: int) -> int:
+        """The judge's verdict on ``candidate`` against the ``rival`` detection: 1, -1, or 0 (none)."""
+        if self.judge is None or candidate is None:
+            return 0
+        held = self._entries[rival][1]
+        return self.judge.prefer(candidate.model, candidate.T_cloud_model, held.model, held.T_cloud_model)
 
     def _covers(self, rival: int, covered: np.ndarray) -> bool:
         """Do the ``covered`` blocks (a candidate's) hold more than ``max_shared`` of the rival's own?"""

@@ -83,3 +83,31 @@ def test_a_near_tie_in_clean_blocks_is_settled_by_score():
     claims = PixelClaims(300, max_shared=0.3)
     claims.add(_detection("u_channel", 0.644), np.arange(0, 149), 0.644, [], clean=0.962)
     assert claims.rivals(np.arange(3, 157), 0.625, clean=0.938) is None
+
+
+class _Judge:
+    """Prefers the named model whatever the scores: stands in for RenderJudge's verdict."""
+
+    def __init__(self, preferred: str | None):
+        self.preferred = preferred
+
+    def prefer(self, model_a, T_a, model_b, T_b) -> int:
+        if self.preferred is None:
+            return 0
+        return 1 if model_a == self.preferred else -1 if model_b == self.preferred else 0
+
+
+def test_the_judges_verdict_comes_before_the_scores_and_a_tie_leaves_them_to_decide():
+    knob, clip = _detection("knob", 0.81), _detection("clip", 0.92)
+    # The clip shows more of itself, but the judge finds the knob explains the depth better: it stays.
+    claims = PixelClaims(100, max_shared=0.3, judge=_Judge("knob"))
+    claims.add(knob, np.arange(0, 20), 0.81, [])
+    assert claims.rivals(np.arange(5, 15), 0.92, candidate=clip) is None
+    # The other way round, the knob found second displaces the clip it scores below.
+    claims = PixelClaims(100, max_shared=0.3, judge=_Judge("knob"))
+    claims.add(clip, np.arange(5, 15), 0.92, [])
+    assert claims.rivals(np.arange(0, 20), 0.81, candidate=knob) == [0]
+    # No verdict: the higher score wins, as without a judge.
+    claims = PixelClaims(100, max_shared=0.3, judge=_Judge(None))
+    claims.add(knob, np.arange(0, 20), 0.81, [])
+    assert claims.rivals(np.arange(5, 15), 0.92, candidate=clip) == [0]

@@ -1,0 +1,52 @@
+"""The render-and-compare judge (psorr.acceptance.render_judge): of two poses that claim the same pixels,
+the one whose render agrees with the measured depth stays, whichever shows more of itself."""
+
+import numpy as np
+import pytest
+import trimesh
+
+from psorr.acceptance.render_judge import RenderJudge
+from psorr.synthetic.mesh_scenes import mesh_scene
+from psorr.verification.depth_compare import DepthRenderer
+from psorr.verification.scene_view import SceneView
+
+# Generated here, not from the catalog: a block, and a block half as long that fits inside it at one end.
+LONG = trimesh.creation.box(extents=(0.08, 0.05, 0.02))
+SHORT = trimesh.creation.box(extents=(0.04, 0.05, 0.02))
+INSIDE = np.eye(4)
+INSIDE[0, 3] = -0.02  # SHORT's pose in LONG's frame: flush with one end, sharing its top and sides
+
+
+def _judge(view):
+    meshes = {"long": LONG, "short": SHORT}
+    renderers = {n: DepthRenderer(m.vertices, m.faces) for n, m in meshes.items()}
+    spheres = {n: (np.asarray(m.vertices).mean(axis=0), 0.5 * float(np.linalg.norm(m.extents))) for n, m in
+               meshes.items()}
+    return RenderJudge(view, renderers, spheres)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_the_part_that_explains_the_whole_surface_wins_over_one_that_fits_inside_it(seed):
+    scene = mesh_scene(np.random.default_rng(seed), {"long": LONG, "short": SHORT}, "single", names=["long"])
+    T = scene.instances[0].T_camera_model
+    judge = _judge(SceneView(scene.cloud))
+    # The short block shows all of itself on the long one's faces, but leaves half of them to the table.
+    assert judge.prefer("long", T, "short", T @ INSIDE) == 1
+    assert judge.prefer("short", T @ INSIDE, "long", T) == -1
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_a_part_larger_than_the_measured_one_loses_where_the_sensor_sees_through_it(seed):
+    scene = mesh_scene(np.random.default_rng(seed), {"long": LONG, "short": SHORT}, "single", names=["short"])
+    T = scene.instances[0].T_camera_model
+    judge = _judge(SceneView(scene.cloud))
+    assert judge.prefer("long", T @ np.linalg.inv(INSIDE), "short", T) == -1
+
+
+def test_two_renders_that_agree_get_no_verdict():
+    scene = mesh_scene(np.random.default_rng(3), {"long": LONG, "short": SHORT}, "single", names=["long"])
+    T = scene.instances[0].T_camera_model
+    judge = _judge(SceneView(scene.cloud))
+    assert judge.prefer("long", T, "long", T) == 0
+    turned = T @ np.diag([-1.0, -1.0, 1.0, 1.0])  # a half turn about its height: the block's own symmetry
+    assert judge.prefer("long", turned, "long", T) == 0
