@@ -26,7 +26,7 @@ from psorr.library.models import Model, ModelLibrary
 from psorr.types import Detection
 from psorr.verification.point_check import CheckParams, PoseCheck, check_pose
 from psorr.verification.scene_view import SceneView
-from psorr.viz.observer import observer, watched
+from psorr.viz.observer import observer
 
 _COARSE = CheckParams(max_points=300)  # the coarse fit's point check: enough to tell the hopeless candidates
 _COARSE_ITERATIONS, _COARSE_POINTS = 15, 1000  # the coarse ICP's, as above
@@ -167,10 +167,6 @@ class Acceptance:
             claims.add(claim.detection, c.supported_blocks, c.score, claim.displaced, 1 - c.violation_ratio)
             accepted.append(claim.detection)
         standing = {id(d) for d in claims.detections}
-        if watched():
-            for d in accepted:
-                if id(d) not in standing:
-                    observer().rejected(d.model, d.T_cloud_model, "displaced by a better detection")
         return [d for d in accepted if id(d) in standing]
 
     def _claim(self, view: SceneView, f: Fitted, claims: PixelClaims, resolved_from: list) -> Claim | None:

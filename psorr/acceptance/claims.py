@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from psorr.types import Detection
+from psorr.viz.observer import observer
 
 _CLEARLY_MORE = 1.25  # a candidate explains more than a detection it covers only by this factor
 
@@ -120,6 +121,8 @@ class PixelClaims:
         """Accept ``detection``: drop the ``displaced`` (from :meth:`rivals`), and give it ``blocks`` no one
         holds; ``score`` and ``clean`` as for :meth:`rivals`."""
         for rival in displaced:
+            held = self._entries[rival][1]
+            observer().rejected(held.model, held.T_cloud_model, "displaced by a better detection")
             self.owner[self.owner == rival] = -1
             self._entries[rival] = None
         index = len(self._entries)

@@ -111,3 +111,22 @@ def test_the_judges_verdict_comes_before_the_scores_and_a_tie_leaves_them_to_dec
     claims = PixelClaims(100, max_shared=0.3, judge=_Judge(None))
     claims.add(knob, np.arange(0, 20), 0.81, [])
     assert claims.rivals(np.arange(5, 15), 0.92, candidate=clip) == [0]
+
+
+def test_a_displaced_detection_is_reported_with_its_reason_whichever_search_found_it():
+    from psorr.viz.observer import RecognitionObserver, observed_by
+
+    class Spy(RecognitionObserver):
+        def __init__(self):
+            self.rejected_models = []
+
+        def rejected(self, model, T_cloud_model, reason):
+            self.rejected_models.append((model, reason))
+
+    claims = PixelClaims(100, max_shared=0.3)
+    claims.add(_detection("bracket", 0.48), np.arange(0, 20), 0.48, [])  # as if from an earlier round
+    spy = Spy()
+    with observed_by(spy):
+        displaced = claims.rivals(np.arange(0, 15), 0.81)
+        claims.add(_detection("board", 0.81), np.arange(0, 15), 0.81, displaced)
+    assert spy.rejected_models == [("bracket", "displaced by a better detection")]
