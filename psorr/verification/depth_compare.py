@@ -80,12 +80,10 @@ def residual_costs(view: SceneView, renderer: DepthRenderer, poses: np.ndarray, 
     ``twins``, pairs (a, b) of indices into ``poses``, only pixels where some pose a renders differently
     from its twin b count instead.
     """
-    pixels, rays = pixel_window(view, centre, radius)
-    if len(pixels) == 0:
+    window = _window_costs(view, centre, radius, lambda rays: renderer.depth(poses, rays))
+    if window is None:
         return np.zeros(len(poses))
-    rendered = behind_plane(view, rays, renderer.depth(poses, rays))
-    sigma = KINECT_V1.depth_sigma(view.depth[pixels])
-    cost = capped_costs(view.depth[pixels], rendered, sigma)
+    cost, rendered, sigma = window
     if twins is not None:
         a, b = np.array(twins).T
         cost = cost[:, differs(rendered[a], rendered[b], sigma).any(axis=0)]
@@ -99,31 +97,35 @@ def rival_costs(view: SceneView, rivals: list[tuple[DepthRenderer, np.ndarray]],
     """(K,) cost of each of K ``rivals`` (a model's renderer and its pose ``T_cloud_model``; different models
     may compete), as :func:`residual_costs`, over the pixels around the sphere (``centre``, ``radius``) where
     some rival renders differently from the first; and how many pixels those are."""
+    window = _window_costs(view, centre, radius,
+                           lambda rays: np.vstack([r.depth(T[None], rays) for r, T in rivals]))
+    if window is None:
+        return np.zeros(len(rivals)), 0
+    cost, rendered, sigma = window
+    telling = differs(rendered, rendered[:1], sigma).any(axis=0)
+    return cost[:, telling].sum(axis=1), int(telling.sum())
+
+
+def _window_costs(view: SceneView, centre: np.ndarray, radius: float, render):
+    """Over the measured pixels around the sphere (``centre``, ``radius``): each render's (K, P) squared depth
+    residual in Kinect sigmas, capped at RESIDUAL_CAP (a render that misses where the sensor measured costs the
+    cap); the (K, P) depths ``render(rays)`` gives for the pixels' rays (P, 3), with the view's supporting plane
+    behind them; and the (P,) sigmas. None when no pixel around it was measured."""
     pixels, rays = pixel_window(view, centre, radius)
     if len(pixels) == 0:
-        return np.zeros(len(rivals)), 0
-    rendered = behind_plane(view, rays, np.vstack([r.depth(T[None], rays) for r, T in rivals]))
-    sigma = KINECT_V1.depth_sigma(view.depth[pixels])
-    telling = differs(rendered, rendered[:1], sigma).any(axis=0)
-    return capped_costs(view.depth[pixels], rendered, sigma)[:, telling].sum(axis=1), int(telling.sum())
-
-
-def behind_plane(view: SceneView, rays: np.ndarray, rendered: np.ndarray) -> np.ndarray:
-    """``rendered`` (K, P) depths along ``rays`` (P, 3), with the view's supporting plane behind them."""
-    if view.support_plane is None:
-        return rendered
-    normal, offset = view.support_plane[:3], view.support_plane[3]
-    towards = rays @ normal
-    with np.errstate(divide="ignore"):
-        plane = np.where(towards < 0, -offset / np.where(towards < 0, towards, -1.0), np.inf)
-    return np.minimum(rendered, plane[None])
-
-
-def capped_costs(observed: np.ndarray, rendered: np.ndarray, sigma: np.ndarray) -> np.ndarray:
-    """(K, P) squared residual of ``rendered`` (K, P) against ``observed`` (P,) depths, in ``sigma`` (P,)
-    units, capped at RESIDUAL_CAP (a render that misses where the sensor measured costs the cap)."""
+        return None
+    rendered = render(rays)
+    if view.support_plane is not None:
+        normal, offset = view.support_plane[:3], view.support_plane[3]
+        towards = rays @ normal
+        with np.errstate(divide="ignore"):
+            plane = np.where(towards < 0, -offset / np.where(towards < 0, towards, -1.0), np.inf)
+        rendered = np.minimum(rendered, plane[None])
+    observed = view.depth[pixels]
+    sigma = KINECT_V1.depth_sigma(observed)
     residual = (rendered - observed[None]) / sigma[None]
-    return np.minimum(np.where(np.isfinite(residual), residual**2, RESIDUAL_CAP), RESIDUAL_CAP)
+    cost = np.minimum(np.where(np.isfinite(residual), residual**2, RESIDUAL_CAP), RESIDUAL_CAP)
+    return cost, rendered, sigma
 
 
 def differs(rendered: np.ndarray, other: np.ndarray, sigma: np.ndarray) -> np.ndarray:
