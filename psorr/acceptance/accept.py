@@ -1,7 +1,8 @@
 """Acceptance: screened candidates fitted by ICP, judged by the point check, and settled against the
 detections so far by the pixels they explain.
 
-Most candidates are wrong, and one coarse ICP shows it, so the fine ICP and the dense point check are
+Most candidates are wrong, and one coarse ICP shows it, so the fine fit to the measured depth
+(:func:`~psorr.acceptance.projective.refine_projective`) and the dense point check are
 kept for the rest (:meth:`Acceptance.fit`). The survivors claim the pixels they explain, best first
 (:class:`~psorr.acceptance.claims.PixelClaims`); only the few that win their pixels are told from their
 near-symmetric twins by render and compare, and checked for a larger object around them.
@@ -78,16 +79,16 @@ class Acceptance:
         return self._settle(view, fitted, claims)
 
     def refine(self, view: SceneView, model: Model, T_cloud_model: np.ndarray) -> Detection:
-        """A known pose judged as candidates are: coarse then fine ICP, and its near-symmetric twins told apart."""
-        return self._resolved(view, model, self._fine_icp(view, model, self._coarse_icp(view, model, T_cloud_model)))
+        """A known pose judged as candidates are: coarse ICP, the fine fit, and its near-symmetric twins told apart."""
+        return self._resolved(view, model, self._fine_fit(view, model, self._coarse_icp(view, model, T_cloud_model)))
 
     def fit(self, view: SceneView, candidate: Candidate, beyond: SingleCylinderMatcher | None = None) -> Fitted | None:
-        """The candidate fitted (coarse, then fine ICP) and point-checked, or None when it fails a bar."""
+        """The candidate fitted (coarse ICP, then the fine fit) and point-checked, or None when it fails a bar."""
         model = self.library.models[candidate.model]
         T, coarse = self._coarse_fit(view, model, candidate.T_cloud_model)
         failed = self._hopeless(coarse)
         if failed is None:
-            T = self._fine_icp(view, model, T)
+            T = self._fine_fit(view, model, T)
             check = check_pose(view, model.points, model.normals, T, self.params.check)
             failed = self._failed_bar(view, model, T, check)
         if failed is None and beyond is not None and not beyond.seen_beyond(
@@ -127,9 +128,8 @@ class Acceptance:
             return f"coarse fit: {coarse.violation_ratio:.0%} of it seen through"
         return None
 
-    def _fine_icp(self, view, model, T):
-        p = self.params
-        return refine_icp(view, model.points, model.normals, T, p.icp_distance / 3, max_points=p.icp_points)
+    def _fine_fit(self, view, model, T):
+        return self.resolvers[model.name].fit_surface(view, T, self.params.icp_distance / 3)
 
     def _failed_bar(self, view: SceneView, model: Model, T: np.ndarray, check: PoseCheck) -> str | None:
         """The first bar the fitted pose fails, or None when it clears them all: seen enough, supported enough

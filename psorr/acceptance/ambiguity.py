@@ -24,6 +24,7 @@ import weakref
 import numpy as np
 
 from psorr.acceptance.icp import refine_icp
+from psorr.acceptance.projective import refine_projective
 from psorr.geometry.rotations import turn
 from psorr.library.symmetries import (
     exact_but_features,
@@ -100,6 +101,12 @@ class NearSymmetryResolver:
             T, alternatives = self._best_half_turn(view, T, icp_distance)
         m = self.model
         return T, check_pose(view, m.points, m.normals, T, DENSE_CHECK), alternatives
+
+    def fit_surface(self, view: SceneView, T_cloud_model: np.ndarray, reach: float) -> np.ndarray:
+        """The pose (4, 4) near ``T_cloud_model`` that fits the model's surface to the measured depth
+        (:func:`refine_projective`), over the pixels within ``reach`` m of the model's bounding sphere."""
+        centre = T_cloud_model[:3, :3] @ self._centre + T_cloud_model[:3, 3]
+        return refine_projective(view, self.renderer, T_cloud_model, centre, 0.5 * self.model.diameter + reach)
 
     def _costs(self, view: SceneView, poses: np.ndarray, twins=None, discriminative: bool = True) -> np.ndarray:
         centre = poses[0, :3, :3] @ self._centre + poses[0, :3, 3]

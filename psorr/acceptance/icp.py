@@ -22,7 +22,7 @@ from psorr.geometry.rotations import cross, from_rotation_vector, rotation_vecto
 from psorr.verification.point_check import CheckParams, depth_tolerance, visible_model_pixels
 from psorr.verification.scene_view import SceneView
 
-DAMPING = 1e-2  # x the largest eigenvalue of the (scaled) normal equations, towards the start pose
+DAMPING = 1e-2  # x the largest eigenvalue of the (scaled) normal equations, towards the pose held
 STOP_STEP = 1e-5  # m, and radians x the source's radius: a step smaller than this has converged
 RUNAWAY = 2.0  # x max_distance: an Open3D fit that moves the points further than this on average is redone
 DAMPED_POINTS = 1000  # ... with about this many of its source points: six unknowns need no more
@@ -70,15 +70,9 @@ def point_to_plane(source: np.ndarray, target: np.ndarray, target_normals: np.nd
         if paired.sum() < 6:
             break
         p, q, n = moved[paired] - centre, target[nearest[paired]] - centre, target_normals[nearest[paired]]
-        # d(residual) / d(turn x scale, slide); np.cross spent 13% of this function on axis handling.
-        J = np.column_stack([cross(p.T, n.T).T / scale, n])
-        r = np.einsum("ij,ij->i", p - q, n)
-        H = J.T @ J
         # The prior holds the start: what the planes do not constrain stays where the start put it.
         so_far = np.concatenate([rotation_vector(R) * scale, R @ centre + t - centre])
-        damping = DAMPING * np.linalg.eigvalsh(H)[-1]
-        step = np.linalg.solve(H + damping * np.eye(6), -J.T @ r - damping * so_far)
-        turn, slide = step[:3] / scale, step[3:]
+        turn, slide = damped_step(p, q, n, scale, prior=so_far)
         dR = from_rotation_vector(turn)
         # The step turns about the centre: p' = dR p + slide, in coordinates about it.
         R, t = dR @ R, dR @ (t - centre) + centre + slide
@@ -87,6 +81,24 @@ def point_to_plane(source: np.ndarray, target: np.ndarray, target_normals: np.nd
     T = np.eye(4)
     T[:3, :3], T[:3, 3] = R, t
     return T
+
+
+def damped_step(p: np.ndarray, q: np.ndarray, normals: np.ndarray, scale: float, weights: np.ndarray | None = None,
+                prior: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The small motion, a turn (3,) in radians about the origin of ``p`` and ``q`` then a slide (3,) in metres,
+    that best moves points ``p`` (N, 3) onto the planes through ``q`` (N, 3) with unit ``normals`` (N, 3), each
+    pair weighted by ``weights`` (N,), damped (Levenberg-Marquardt). Turns are solved for in units of ``scale``
+    (m, the points' radius), so that one damping suits turns and slides. Without ``prior`` the damping holds
+    the current pose; with it, the motion (6,) back to the pose to hold (turn x scale, slide)."""
+    # d(residual) / d(turn x scale, slide); np.cross spent 13% of the ICP on axis handling.
+    J = np.column_stack([cross(p.T, normals.T).T / scale, normals])
+    r = np.einsum("ij,ij->i", p - q, normals)
+    weighted = J if weights is None else J * weights[:, None]
+    H = weighted.T @ J
+    damping = DAMPING * np.linalg.eigvalsh(H)[-1]
+    pull = -weighted.T @ r if prior is None else -weighted.T @ r - damping * prior
+    step = np.linalg.solve(H + damping * np.eye(6), pull)
+    return step[:3] / scale, step[3:]
 
 
 def refine_icp(view: SceneView, model_points, model_normals, T_cloud_model, max_distance: float,

@@ -13,8 +13,9 @@ from psorr.verification.point_check import CheckParams
 class AcceptParams:
     """Settings of acceptance; distances in metres, shares in [0, 1].
 
-    A candidate is fitted by point-to-plane ICP pairing points within ``icp_distance`` (the fine pass
-    within a third of it, with ``icp_points`` model points), then point-checked (``check``). It is accepted
+    A candidate is fitted by point-to-plane ICP pairing points within ``icp_distance``, then its rendered
+    surface is fitted to the measured depth over the pixels within a third of that distance of the model
+    (:func:`psorr.acceptance.projective.refine_projective`), then point-checked (``check``). It is accepted
     when at least ``min_visible_fraction`` of its surface is measured, or, for a part partly hidden by
     others, ``min_unblocked_fraction`` of its unhidden points; when at least ``min_support`` points are
     supported, ``min_support_above_table`` of them higher above the supporting plane than their depth
@@ -25,7 +26,6 @@ class AcceptParams:
     """
 
     icp_distance: float = 0.012
-    icp_points: int = 1500  # model points in the fine ICP (3000: a fifth more time, 0.05 mm better ADD)
     check: CheckParams = field(default_factory=CheckParams)
     min_visible_fraction: float = 0.35
     min_unblocked_fraction: float = 0.6
@@ -43,7 +43,7 @@ class AcceptParams:
     continuation: ContinuationParams = field(default_factory=ContinuationParams)
 
     def __post_init__(self):
-        check.whole(self, "min_support", "icp_points")
+        check.whole(self, "min_support")
         check.whole(self, "min_support_above_table", minimum=0, note=" (0 turns it off)")
         check.positive(self, "max_float", unit=" metres", optional=True)
         check.positive(self, "icp_distance", unit=" metres")

@@ -46,6 +46,20 @@ class DepthRenderer:
         # A direction with z = 1 makes the ray parameter the depth itself.
         return hit.reshape(len(poses), len(rays)).astype(np.float64)
 
+    def surface(self, T_cloud_model: np.ndarray, rays: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Where ``rays`` (P, 3) from the origin with z = 1 meet the model at ``T_cloud_model`` (4, 4): the
+        (P,) depth (inf where a ray misses) and the (P, 3) unit normal of the face hit, in the cloud frame
+        (NaN where a ray misses)."""
+        R, t = T_cloud_model[:3, :3], T_cloud_model[:3, 3]
+        batch = np.empty((len(rays), 6), dtype=np.float32)
+        batch[:, :3] = -R.T @ t
+        batch[:, 3:] = rays @ R
+        hit = self._scene.cast_rays(o3d.core.Tensor(batch))
+        normals = hit["primitive_normals"].numpy().astype(np.float64) @ R.T
+        depth = hit["t_hit"].numpy().astype(np.float64)
+        normals[~np.isfinite(depth)] = np.nan
+        return depth, normals
+
     def distance(self, points: np.ndarray) -> np.ndarray:
         """(N,) unsigned distance (metres) from model-frame ``points`` (N, 3) to the mesh."""
         return self._scene.compute_distance(o3d.core.Tensor(np.asarray(points, dtype=np.float32))).numpy()
