@@ -23,5 +23,6 @@ def test_a_pose_only_the_table_supports_is_not_a_detection(library, scene, metho
         pytest.skip(f"{path} is absent (the OSD data set is not installed)")
     cloud = read_cloud(path)
     ruled_off = Recognizer(library, method, RecognizeParams(acceptance=AcceptParams(min_support_above_table=0)))
-    assert [d.model for d in ruled_off.recognize(cloud, np.random.default_rng(0)).detections] == [model]
+    found = [d.model for d in ruled_off.recognize(cloud, np.random.default_rng(0)).detections]
+    assert found and set(found) == {model}, found
     assert Recognizer(library, method).recognize(cloud, np.random.default_rng(0)).detections == ()
