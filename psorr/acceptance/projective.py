@@ -11,7 +11,7 @@ part pairs the point where its ray meets the model's mesh with the point it meas
 is their distance along the mesh's own normal, which is exact. A pixel whose measurement is further
 from the model than GATE_SIGMAS sensor sigmas (the table beside a part a little off, an occluder in
 front, a hole seen through) is no pair this iteration. From the same coarse fits, the idler came to
-within 3 mm and 6 degrees, the hinge within 1 mm and 5 (docs/decisions/0062-projective-refinement.md).
+within 2.8 mm and 6.4 degrees, the hinge within 0.8 mm and 4.6 (docs/decisions/0062-projective-refinement.md).
 """
 
 from __future__ import annotations
