@@ -53,7 +53,7 @@ def headline(base: str = "") -> str:
         [f"[Other sensors, {sen['clutter_scenes']} clutter scenes]({base}sensors.md)",
          recognition.sensors_headline(sen["rows"])],
         [f"[Real clouds without our parts]({base}osd-false-positives.md)",
-         f"{osd_false} false detections over {len(osd['psorr'])} OSD clouds"],
+         f"{osd_false} false detection{'' if osd_false == 1 else 's'} over {len(osd['psorr'])} OSD clouds"],
         [f"[Episodes, {rec['episodes']} seeded, a person reaching in]({base}episodes.md)",
          f"{rec['grasp_success_rate']:.0%} grasped, {rec['place_success_rate']:.0%} placed from recognised poses "
          f"(true poses: {ora['grasp_success_rate']:.0%}, {ora['place_success_rate']:.0%}); "
