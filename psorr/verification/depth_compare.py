@@ -39,9 +39,7 @@ class DepthRenderer:
         poses = np.asarray(poses).reshape(-1, 4, 4)
         batch = np.empty((len(poses), len(rays), 6), dtype=np.float32)
         for k, T in enumerate(poses):
-            R, t = T[:3, :3], T[:3, 3]
-            batch[k, :, :3] = -R.T @ t  # the sensor origin in the model frame
-            batch[k, :, 3:] = rays @ R  # each ray's direction, rotated into the model frame
+            _model_frame_rays(T, rays, batch[k])
         hit = self._scene.cast_rays(o3d.core.Tensor(batch.reshape(-1, 6)))["t_hit"].numpy()
         # A direction with z = 1 makes the ray parameter the depth itself.
         return hit.reshape(len(poses), len(rays)).astype(np.float64)
@@ -50,12 +48,9 @@ class DepthRenderer:
         """Where ``rays`` (P, 3) from the origin with z = 1 meet the model at ``T_cloud_model`` (4, 4): the
         (P,) depth (inf where a ray misses) and the (P, 3) unit normal of the face hit, in the cloud frame
         (NaN where a ray misses)."""
-        R, t = T_cloud_model[:3, :3], T_cloud_model[:3, 3]
-        batch = np.empty((len(rays), 6), dtype=np.float32)
-        batch[:, :3] = -R.T @ t
-        batch[:, 3:] = rays @ R
+        batch = _model_frame_rays(T_cloud_model, rays, np.empty((len(rays), 6), dtype=np.float32))
         hit = self._scene.cast_rays(o3d.core.Tensor(batch))
-        normals = hit["primitive_normals"].numpy().astype(np.float64) @ R.T
+        normals = hit["primitive_normals"].numpy().astype(np.float64) @ T_cloud_model[:3, :3].T
         depth = hit["t_hit"].numpy().astype(np.float64)
         normals[~np.isfinite(depth)] = np.nan
         return depth, normals
@@ -63,6 +58,15 @@ class DepthRenderer:
     def distance(self, points: np.ndarray) -> np.ndarray:
         """(N,) unsigned distance (metres) from model-frame ``points`` (N, 3) to the mesh."""
         return self._scene.compute_distance(o3d.core.Tensor(np.asarray(points, dtype=np.float32))).numpy()
+
+
+def _model_frame_rays(T_cloud_model: np.ndarray, rays: np.ndarray, out: np.ndarray) -> np.ndarray:
+    """``out`` (P, 6) filled with ``rays`` (P, 3) from the sensor origin as Open3D casts them against a mesh at
+    ``T_cloud_model``: the origin, then each direction, in the model frame."""
+    R, t = T_cloud_model[:3, :3], T_cloud_model[:3, 3]
+    out[:, :3] = -R.T @ t  # the sensor origin in the model frame
+    out[:, 3:] = rays @ R  # each ray's direction, rotated into the model frame
+    return out
 
 
 def pixel_window(view: SceneView, centre: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray]:

@@ -17,8 +17,6 @@ STEP = trimesh.util.concatenate([trimesh.creation.box(extents=(0.032, 0.02, 0.00
                                                       transform=trimesh.transformations.translation_matrix(
                                                           (0.010, 0.0, 0.010)))])
 RENDERER = DepthRenderer(STEP.vertices, STEP.faces)
-
-
 SAMPLES = np.asarray(STEP.vertices)[STEP.faces].mean(axis=1)  # a point on every face
 
 
