@@ -105,7 +105,17 @@ def solve(objects: dict[str, tuple[PlanObject, str]], placed: frozenset[str] = f
         result = planner.solve(problem(objects, placed))
     if result.plan is None:
         raise UnreachableGoalError(f"{path or 'the plan'}: the planner ({ENGINE}) found no plan: {result.status.name}")
-    return tuple(_step(a, objects) for a in result.plan.actions)
+    return _in_goal_order(tuple(_step(a, objects) for a in result.plan.actions), objects)
+
+
+def _in_goal_order(steps: tuple[Step, ...], objects: dict) -> tuple[Step, ...]:
+    """The plan's steps with each object's pick and place kept together, objects in the goal's order.
+
+    The engine orders interchangeable objects by Python's string hashing, which changes from process to
+    process, so a seed would not reproduce a run. In this domain an object's steps touch only its own facts,
+    its own place and the hand, so any order of whole objects is as valid as the engine's."""
+    rank = {name: k for k, name in enumerate(objects)}
+    return tuple(sorted(steps, key=lambda s: (rank[s.object], s.action != "pick")))
 
 
 def _step(action, objects) -> Step:
