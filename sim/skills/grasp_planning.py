@@ -4,7 +4,7 @@
 (``World.grasps``: the catalog's, or those synthesised from a user's mesh, best first) that
 is narrower than the gripper, not a thin-wall pinch, approached from above, and whose pre-grasp,
 grasp, above-fixture and place poses the IK reaches. The grasps approached most nearly straight down
-come first (a part lying any way: those made for the rest it lies in), then those whose pads fit inside
+come first (a part lying any way: those made for the rest it lies in), then those whose fingers fit inside
 the fixture's pocket; the others are released above the pocket's walls. Nothing here reads the
 simulator's truth: only the estimate, the part's mesh and grasps, and the robot's own kinematics.
 """
@@ -20,13 +20,13 @@ import trimesh
 
 from sim.control.cell import ArmCell
 from sim.errors import UnreachableTargetError
+from sim.skills.finger_clearance import fingers_clear_fixture
 from sim.skills.grasps import Grasp
 from sim.skills.part_geometry import hull_points
 
 PRE_GRASP = 0.10  # m back along -approach before the approach
 LIFT = 0.10  # m the tool rises after closing; the transport runs at that height
 PAD_CLEARANCE = 0.0015  # m kept between the pads' lower ends and the table when grasping
-WALL_CLEARANCE = 0.002  # m between the pads' lower ends and the fixture walls' tops at release
 TOTE_DROP = 0.004  # m above the tote's floor a part is let go: set down, not dropped, yet clear of the floor
 
 
@@ -60,12 +60,12 @@ def shift(T: np.ndarray, offset) -> np.ndarray:
 @dataclass(frozen=True, eq=False)
 class PlacePlan:
     """A reachable seat for the held part: the tool pose (4, 4, world) that seats it in its fixture, the
-    joints (nq,) above that at the transport height, and whether the pads fit inside the fixture's pocket
-    there (if not, the part is released above the pocket's walls)."""
+    joints (nq,) above that at the transport height, and whether the fingers fit inside the fixture's
+    pocket there (if not, the part is released above the pocket's walls)."""
 
     T_place: np.ndarray
     q_above: np.ndarray
-    pads_clear: bool
+    fingers_clear: bool
 
 
 @dataclass(frozen=True, eq=False)
@@ -89,33 +89,16 @@ class NoGrasp:
 
 @dataclass(frozen=True, eq=False)
 class SeatOption:
-    """One way to seat a held part: the tool pose (4, 4, world) in the fixture, whether the pads clear the
-    fixture's walls there, and the wrist's turn (deg) from the grasp (the less, the better)."""
+    """One way to seat a held part: the tool pose (4, 4, world) in the fixture, whether the fingers clear
+    the fixture's walls there, and the wrist's turn (deg) from the grasp (the less, the better)."""
 
     T_place: np.ndarray
-    pads_clear: bool
+    fingers_clear: bool
     turn_deg: float
 
 
-def pads_clear_fixture(cell: ArmCell, info, T_fix_tool: np.ndarray, width: float) -> bool:
-    """Whether both pads, closed to ``width`` around the seated part, stay inside the fixture's pocket
-    (or above its walls); ``T_fix_tool`` is the tool pose in the fixture frame."""
-    cfg = cell.world.config
-    hx, hy, hz = (float(v) for v in cell.model.geom_size[cell.pads[0]])
-    lo = info.bounds()[0, :2] - cfg.fixture_clearance
-    hi = info.bounds()[1, :2] + cfg.fixture_clearance
-    for side in (-1.0, 1.0):
-        cx = side * (width / 2 + hx)
-        corners = np.array([[cx + a * hx, b * hy, c * hz, 1.0] for a in (-1, 1) for b in (-1, 1) for c in (-1, 1)])
-        pts = corners @ T_fix_tool.T
-        low = pts[:, 2] < cfg.fixture_wall[1] + WALL_CLEARANCE
-        if np.any(low & np.any((pts[:, :2] < lo) | (pts[:, :2] > hi), axis=1)):
-            return False
-    return True
-
-
 def plan_grasp(cell: ArmCell, part: str, T_est: np.ndarray) -> GraspPlan | NoGrasp:
-    """The first reachable grasp: the most nearly straight down first, then those whose pads fit the fixture's
+    """The first reachable grasp: the most nearly straight down first, then those whose fingers fit the fixture's
     pocket, then in the part's order."""
     world = cell.world
     info = world.catalog[part]
@@ -155,7 +138,7 @@ def plan_grasp(cell: ArmCell, part: str, T_est: np.ndarray) -> GraspPlan | NoGra
             # of the rest it lies in approach straight down; another rest's, tilted, may close on air.
             tilt = float(approach_w[2])
             for seat in seats:
-                candidates.append(((tilt, not seat.pads_clear, index, seat.turn_deg), grasp, flip, T_grasp, seat))
+                candidates.append(((tilt, not seat.fingers_clear, index, seat.turn_deg), grasp, flip, T_grasp, seat))
     candidates.sort(key=lambda c: c[0])
     for _, grasp, flip, T_grasp, seat in candidates:
         T_place = seat.T_place
@@ -172,7 +155,7 @@ def plan_grasp(cell: ArmCell, part: str, T_est: np.ndarray) -> GraspPlan | NoGra
         if problem:
             reasons.append(f"{grasp.name}{' flipped' if flip else ''}: {problem}")
             continue
-        return GraspPlan(grasp, T_grasp, q_pre, q_grasp, PlacePlan(T_place, q_above, seat.pads_clear))
+        return GraspPlan(grasp, T_grasp, q_pre, q_grasp, PlacePlan(T_place, q_above, seat.fingers_clear))
     return NoGrasp("; ".join(reasons) or "the part has no grasps")
 
 
@@ -211,13 +194,13 @@ def seat_options(cell: ArmCell, info, T_fix: np.ndarray, T_part_tool: np.ndarray
                  T_grasp: np.ndarray) -> list[SeatOption]:
     """The tool poses (4, 4, world) that seat a part held at ``T_part_tool`` (the tool in the part's frame)
     in its fixture ``T_fix``, one per symmetry of the part whose tool approach points down; each with
-    whether the pads clear the fixture's walls, and the wrist's turn (deg) from ``T_grasp``."""
+    whether the fingers clear the fixture's walls, and the wrist's turn (deg) from ``T_grasp``."""
     out = []
     for S in info.symmetries:
         T_place = T_fix @ S @ T_part_tool
         if not from_above(T_place[:3, 2]):
             continue
-        clears = pads_clear_fixture(cell, info, S @ T_part_tool, width)
+        clears = fingers_clear_fixture(cell, info, S @ T_part_tool, width)
         out.append(SeatOption(T_place, clears, angle_deg(T_grasp[:3, :3].T @ T_place[:3, :3])))
     return out
 
@@ -230,7 +213,7 @@ def replan_place(cell: ArmCell, part: str, grasp: Grasp, T_part_tool: np.ndarray
     world = cell.world
     info = world.catalog[part]
     options = seat_options(cell, info, world.T_world_fixtures[part], T_part_tool, grasp.width, T_grasp)
-    for seat in sorted(options, key=lambda o: (not o.pads_clear, o.turn_deg)):
+    for seat in sorted(options, key=lambda o: (not o.fingers_clear, o.turn_deg)):
         T_place = seat.T_place
         try:
             T_above = shift(T_place, [0, 0, T_grasp[2, 3] + LIFT - T_place[2, 3]])
@@ -239,7 +222,7 @@ def replan_place(cell: ArmCell, part: str, grasp: Grasp, T_part_tool: np.ndarray
         except UnreachableTargetError:
             continue
         if not (configuration_problem(cell, q_above) or configuration_problem(cell, q_place)):
-            return PlacePlan(T_place, q_above, seat.pads_clear)
+            return PlacePlan(T_place, q_above, seat.fingers_clear)
     return None
 
 

@@ -21,10 +21,10 @@ import numpy as np
 from sim.control.cell import ArmCell
 from sim.control.ik import T_world_site
 from sim.errors import SimInputError, UnreachableTargetError, WorkspaceBlockedError
+from sim.skills.finger_clearance import RELEASE_EASE, WALL_CLEARANCE, finger_reach
 from sim.skills.grasp_planning import (
     LIFT,
     PRE_GRASP,
-    WALL_CLEARANCE,
     GraspPlan,
     NoGrasp,
     PlacePlan,
@@ -251,14 +251,15 @@ def transport(start: PickStart, lifted: Lifted, seat: Seat) -> Carried:
 def release(start: PickStart, plan: GraspPlan, seat: Seat, carried: Carried) -> Released:
     """Descend to just above seating and ease the gripper open; the cell no longer holds the part."""
     world, cell, place = start.world, start.cell, seat.place
-    # Release just above seating, or higher when the pads would otherwise land on the fixture's walls
-    # (they stick out past the part along the closing direction, further than the pocket's clearance).
+    # Release just above seating, or higher when the fingers would otherwise land on the fixture's walls
+    # or be pinned against them as they open (they stick out past the part along the closing direction).
     wall_top = world.table_top + world.config.fixture_wall[1] + WALL_CLEARANCE
-    drop = 0.002 if place.pads_clear else max(0.002, wall_top - (place.T_place[2, 3] - cell.pad_reach))
+    reach = finger_reach(cell, plan.grasp.width + RELEASE_EASE)
+    drop = 0.002 if place.fingers_clear else max(0.002, wall_top - (place.T_place[2, 3] - reach))
     T_release = shift(place.T_place, [0, 0, drop])
     qs = cell.path(carried.q, carried.T_above, T_release)
     cell.follow(qs, 1.2)
-    cell.gripper_to(min(world.arm.gripper_open, plan.grasp.width + 0.012), 0.3, ramp_s=0.3)  # ease off, no fling
+    cell.gripper_to(min(world.arm.gripper_open, plan.grasp.width + RELEASE_EASE), 0.3, ramp_s=0.3)
     cell.holding = None
     return Released(T_release, carried.T_above, qs[-1])
 

@@ -1,0 +1,60 @@
+"""Where the gripper's fingers are, in the tool's frame, and whether they fit a fixture's pocket.
+
+A part is let go just above its seat only when everything on the fingers (the pads and the fingers behind
+them) stays inside the fixture's pocket, closed on the part and eased open to let it go; otherwise the
+fingers would come down on the pocket's walls, or be pinned against them as they open, and the part is
+let go from above the walls instead. Read from the robot's own model: nothing here is simulator truth.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from sim.control.cell import ArmCell
+
+RELEASE_EASE = 0.012  # m the pads open past the grasp's width to let go: enough to free the part, no fling
+WALL_CLEARANCE = 0.002  # m between the fingers' lower ends and the fixture walls' tops at release
+
+_SIGNS = np.array([[a, b, c] for a in (-1, 1) for b in (-1, 1) for c in (-1, 1)], dtype=float)
+
+
+def finger_corners(cell: ArmCell, opening: float) -> np.ndarray:
+    """(8 G, 3) corners of the bounding boxes of the fingers' G collision geoms (pads included) in the tool
+    frame (m; z along the approach), with the pads ``opening`` m apart."""
+    model, cfg = cell.model, cell.cfg
+    q = model.key(cfg.home_key).qpos.copy()
+    for joint in cfg.finger_joints:
+        q[model.joint(joint).qposadr[0]] = opening / 2.0  # a finger joint is its pad's distance from the tool
+    data = cell.world.kinematics(q)
+    tool = model.site(cfg.tool_site).id
+    R_tool, p_tool = data.site_xmat[tool].reshape(3, 3), data.site_xpos[tool]
+    corners = []
+    for g in sorted(cell.finger_geoms):
+        if model.geom_contype[g] == 0 and model.geom_conaffinity[g] == 0:
+            continue  # visual only
+        centre, half = model.geom_aabb[g, :3], model.geom_aabb[g, 3:]
+        local = centre + _SIGNS * half
+        world = local @ data.geom_xmat[g].reshape(3, 3).T + data.geom_xpos[g]
+        corners.append((world - p_tool) @ R_tool)
+    return np.concatenate(corners)
+
+
+def finger_reach(cell: ArmCell, opening: float) -> float:
+    """How far (m) the fingers reach beyond the tool site along the approach, ``opening`` m apart."""
+    return float(finger_corners(cell, opening)[:, 2].max())
+
+
+def fingers_clear_fixture(cell: ArmCell, info, T_fix_tool: np.ndarray, width: float) -> bool:
+    """Whether the fingers, closed to ``width`` around the seated part and then eased open by
+    ``RELEASE_EASE``, stay inside the fixture's pocket wherever they are lower than its walls' tops;
+    ``T_fix_tool`` is the tool pose in the fixture's frame. The pocket is convex and the fingers move
+    straight out, so the two ends of the opening bound every position between them."""
+    cfg = cell.world.config
+    lo = info.bounds()[0, :2] - cfg.fixture_clearance
+    hi = info.bounds()[1, :2] + cfg.fixture_clearance
+    for opening in (width, width + RELEASE_EASE):
+        pts = finger_corners(cell, opening) @ T_fix_tool[:3, :3].T + T_fix_tool[:3, 3]
+        low = pts[:, 2] < cfg.fixture_wall[1] + WALL_CLEARANCE
+        if np.any(low & np.any((pts[:, :2] < lo) | (pts[:, :2] > hi), axis=1)):
+            return False
+    return True
