@@ -8,6 +8,8 @@ let go from above the walls instead. Read from the robot's own model: nothing he
 
 from __future__ import annotations
 
+import weakref
+
 import numpy as np
 
 from sim.control.cell import ArmCell
@@ -15,12 +17,21 @@ from sim.control.cell import ArmCell
 RELEASE_EASE = 0.012  # m the pads open past the grasp's width to let go: enough to free the part, no fling
 WALL_CLEARANCE = 0.002  # m between the fingers' lower ends and the fixture walls' tops at release
 
+_AFFINE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # cell -> corners closed, and per metre open
 _SIGNS = np.array([[a, b, c] for a in (-1, 1) for b in (-1, 1) for c in (-1, 1)], dtype=float)
 
 
 def finger_corners(cell: ArmCell, opening: float) -> np.ndarray:
     """(8 G, 3) corners of the bounding boxes of the fingers' G collision geoms (pads included) in the tool
     frame (m; z along the approach), with the pads ``opening`` m apart."""
+    if cell not in _AFFINE:
+        closed = _corners_at(cell, 0.0)
+        _AFFINE[cell] = (closed, _corners_at(cell, 1.0) - closed)
+    closed, per_metre = _AFFINE[cell]
+    return closed + opening * per_metre  # the fingers slide: their corners move in proportion
+
+
+def _corners_at(cell: ArmCell, opening: float) -> np.ndarray:
     model, cfg = cell.model, cell.cfg
     q = model.key(cfg.home_key).qpos.copy()
     for joint in cfg.finger_joints:
