@@ -55,11 +55,16 @@ def headline(base: str = "") -> str:
         [f"[Real clouds without our parts]({base}osd-false-positives.md)",
          f"{osd_false} false detection{'' if osd_false == 1 else 's'} over {len(osd['psorr'])} OSD clouds"],
         [f"[Episodes, {rec['episodes']} seeded, a person reaching in]({base}episodes.md)",
-         f"{rec['grasp_success_rate']:.0%} grasped, {rec['place_success_rate']:.0%} placed from recognised poses "
-         f"(true poses: {ora['grasp_success_rate']:.0%}, {ora['place_success_rate']:.0%}); "
+         f"{_share(rec['grasp_success_rate'])} grasped, {_share(rec['place_success_rate'])} placed from recognised "
+         f"poses (true poses: {_share(ora['grasp_success_rate'])}, {_share(ora['place_success_rate'])}); "
          f"{rec['wall_s_per_episode']:.1f} s a mean episode on one core"],
     ]
     return table(["benchmark", "result"], rows)
+
+
+def _share(rate: float) -> str:
+    """A success rate as a percentage, to one decimal unless whole: 99.5% is not rounded up to 100%."""
+    return f"{rate:.0%}" if round(rate * 100, 1) == round(rate * 100) else f"{rate:.1%}"
 
 
 # ---- the decision records' index (docs/decisions/NNNN-title.md) -----------------------------------------------
