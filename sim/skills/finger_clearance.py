@@ -3,17 +3,22 @@
 A part is let go just above its seat only when everything on the fingers (the pads and the fingers behind
 them) stays inside the fixture's pocket, closed on the part and eased open to let it go; otherwise the
 fingers would come down on the pocket's walls, or be pinned against them as they open, and the part is
-let go from above the walls instead. Read from the robot's own model: nothing here is simulator truth.
+let go from above the walls instead. The fingers, opened wide on the way down to a grasp, must not land
+on a fixture or the tote beside the part either: they would hold the arm up short of the grasp, and the
+pads would close off centre. Read from the robot's own model and the cell's furniture: nothing here is
+simulator truth.
 """
 
 from __future__ import annotations
 
 import weakref
 
+import mujoco
 import numpy as np
 
 from sim.control.cell import ArmCell
 
+PRESHAPE = 0.006  # m the pads stand open past the grasp's width just before they close on the part
 RELEASE_EASE = 0.012  # m the pads open past the grasp's width to let go: enough to free the part, no fling
 WALL_CLEARANCE = 0.002  # m between the fingers' lower ends and the fixture walls' tops at release
 
@@ -69,3 +74,36 @@ def fingers_clear_fixture(cell: ArmCell, info, T_fix_tool: np.ndarray, width: fl
         if np.any(low & np.any((pts[:, :2] < lo) | (pts[:, :2] > hi), axis=1)):
             return False
     return True
+
+
+def approach_opening(cell: ArmCell, q_grasp: np.ndarray, width: float) -> tuple[float | None, str]:
+    """How far (m) to open the pads on the way down to a grasp ``width`` m wide with the arm ending at
+    ``q_grasp`` (nq,): the gripper's widest, which forgives the most pose error, or else just past the
+    grasp's width (``PRESHAPE``) when wide open the fingers would land on a fixture or the tote beside the
+    part; (None, why) when they would either way."""
+    widest = cell.world.arm.gripper_open
+    why = ""
+    for opening in (widest, min(widest, width + PRESHAPE)):
+        why = fingers_on_furniture(cell, q_grasp, opening)
+        if not why:
+            return opening, ""
+    return None, why
+
+
+def fingers_on_furniture(cell: ArmCell, q: np.ndarray, opening: float) -> str:
+    """Which fixture or tote the fingers, ``opening`` m apart, would touch with the arm at ``q`` (nq,), or "".
+    Unlike a neighbouring part, these never move out of the way."""
+    model, world = cell.model, cell.world
+    furniture = {model.body(f"{name}_fixture").id for name in world.T_world_fixtures}
+    if world.T_world_tote is not None:
+        furniture.add(model.body("tote").id)
+    q = q.copy()
+    for joint in cell.cfg.finger_joints:
+        q[model.joint(joint).qposadr[0]] = opening / 2.0
+    data = world.kinematics(q)
+    mujoco.mj_collision(model, data)
+    for contact in data.contact[: data.ncon]:
+        for mine, other in ((contact.geom1, contact.geom2), (contact.geom2, contact.geom1)):
+            if contact.dist < 0 and mine in cell.finger_geoms and model.geom_bodyid[other] in furniture:
+                return f"the fingers would land on {model.body(model.geom_bodyid[other]).name}"
+    return ""

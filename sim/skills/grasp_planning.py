@@ -20,7 +20,7 @@ import trimesh
 
 from sim.control.cell import ArmCell
 from sim.errors import UnreachableTargetError
-from sim.skills.finger_clearance import fingers_clear_fixture
+from sim.skills.finger_clearance import approach_opening, fingers_clear_fixture
 from sim.skills.grasps import Grasp
 from sim.skills.part_geometry import hull_points
 
@@ -71,13 +71,15 @@ class PlacePlan:
 @dataclass(frozen=True, eq=False)
 class GraspPlan:
     """A reachable grasp: the tool pose (4, 4, world) at the grasp, the joints (nq,) at the pre-grasp and at
-    the grasp, and where the part is seated."""
+    the grasp, where the part is seated, and how far (m) the pads are opened on the way down (the gripper's
+    widest, unless that would land the fingers on a fixture or the tote)."""
 
     grasp: Grasp
     T_grasp: np.ndarray
     q_pre: np.ndarray
     q_grasp: np.ndarray
     place: PlacePlan
+    approach_opening: float
 
 
 @dataclass(frozen=True)
@@ -152,10 +154,12 @@ def plan_grasp(cell: ArmCell, part: str, T_est: np.ndarray) -> GraspPlan | NoGra
             reasons.append(f"{grasp.name}{' flipped' if flip else ''}: {exc}")
             continue
         problem = next(filter(None, (configuration_problem(cell, q) for q in (q_pre, q_grasp, q_above, q_place))), "")
+        opening, beside = approach_opening(cell, q_grasp, grasp.width)
+        problem = problem or beside
         if problem:
             reasons.append(f"{grasp.name}{' flipped' if flip else ''}: {problem}")
             continue
-        return GraspPlan(grasp, T_grasp, q_pre, q_grasp, PlacePlan(T_place, q_above, seat.fingers_clear))
+        return GraspPlan(grasp, T_grasp, q_pre, q_grasp, PlacePlan(T_place, q_above, seat.fingers_clear), opening)
     return NoGrasp("; ".join(reasons) or "the part has no grasps")
 
 

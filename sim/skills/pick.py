@@ -21,7 +21,7 @@ import numpy as np
 from sim.control.cell import ArmCell
 from sim.control.ik import T_world_site
 from sim.errors import SimInputError, UnreachableTargetError, WorkspaceBlockedError
-from sim.skills.finger_clearance import RELEASE_EASE, WALL_CLEARANCE, finger_reach
+from sim.skills.finger_clearance import PRESHAPE, RELEASE_EASE, WALL_CLEARANCE, finger_reach
 from sim.skills.grasp_planning import (
     LIFT,
     PRE_GRASP,
@@ -189,7 +189,7 @@ def start_pick(world: World, part: str, T_world_part_estimate, cell: ArmCell | N
 def approach(start: PickStart, plan: GraspPlan) -> None:
     """Open the gripper, swing to the pre-grasp in joint space, then move straight in along the approach."""
     cell = start.cell
-    cell.gripper_to(start.world.arm.gripper_open, 0.2)
+    cell.gripper_to(plan.approach_opening, 0.2)
     cell.move_joints(plan.q_pre[cell.qadr], ramp_s=1.5)
     T_pre = shift(plan.T_grasp, -PRE_GRASP * plan.T_grasp[:3, 2])
     cell.follow(cell.path(plan.q_pre, T_pre, plan.T_grasp), 1.0)
@@ -198,7 +198,7 @@ def approach(start: PickStart, plan: GraspPlan) -> None:
 def close_on_part(start: PickStart, plan: GraspPlan) -> bool:
     """Close the gripper on the part; whether both pads touch it. From here the cell holds the part."""
     cell, world, part = start.cell, start.world, start.part
-    cell.gripper_to(min(world.arm.gripper_open, plan.grasp.width + 0.006), 0.1, ramp_s=0.3)
+    cell.gripper_to(min(world.arm.gripper_open, plan.grasp.width + PRESHAPE), 0.1, ramp_s=0.3)
     cell.gripper_to(world.arm.gripper_closed, 0.4, ramp_s=0.6)  # squeeze gently: a snap shoves the part
     touching = cell.pads_touch(start.body)
     cell.holding = part

@@ -7,7 +7,14 @@ import numpy as np
 import pytest
 
 from sim.control.cell import ArmCell
-from sim.skills.finger_clearance import RELEASE_EASE, finger_corners, finger_reach, fingers_clear_fixture
+from sim.skills.finger_clearance import (
+    PRESHAPE,
+    RELEASE_EASE,
+    finger_corners,
+    finger_reach,
+    fingers_clear_fixture,
+    fingers_on_furniture,
+)
 from sim.world import WorldConfig, build_world
 
 REPO = Path(__file__).resolve().parents[3]
@@ -60,4 +67,22 @@ def test_the_chassis_is_seated_where_its_fingers_once_landed_on_the_fixtures_wal
 
     world = build_world(load_task(REPO / "tasks" / "kit.yaml").world, np.random.default_rng([6, 0]))
     result = pick_and_place(world, "chassis", world.T_world_workpieces["chassis"])
+    assert result.placed and result.place_error_mm < 1.0, result.note
+
+
+def test_fingers_that_would_land_on_a_fixture_beside_the_part_approach_opened_only_past_its_width():
+    """Demo seed [0, 32]: the U-channel lies beside the flanged hub's fixture. Opened wide (80 mm) on the way
+    down, every grasp's fingers land on that fixture's walls, the arm stops 8 mm short and the pads close
+    off centre; opened just past the grasp's width, they clear it and the part is seated."""
+    from sim.skills.grasp_planning import plan_grasp
+    from sim.skills.pick import pick_and_place
+    from sim.world.tasks import load_task
+
+    world = build_world(load_task(REPO / "tasks" / "demo.yaml").world, np.random.default_rng([0, 32]))
+    cell = ArmCell(world)
+    plan = plan_grasp(cell, "u_channel", world.T_world_workpieces["u_channel"])
+    assert plan.approach_opening == pytest.approx(plan.grasp.width + PRESHAPE)
+    assert "flanged_hub_fixture" in fingers_on_furniture(cell, plan.q_grasp, world.arm.gripper_open)
+    assert fingers_on_furniture(cell, plan.q_grasp, plan.approach_opening) == ""
+    result = pick_and_place(world, "u_channel", world.T_world_workpieces["u_channel"], cell)
     assert result.placed and result.place_error_mm < 1.0, result.note
