@@ -38,10 +38,7 @@ def finger_corners(cell: ArmCell, opening: float) -> np.ndarray:
 
 def _corners_at(cell: ArmCell, opening: float) -> np.ndarray:
     model, cfg = cell.model, cell.cfg
-    q = model.key(cfg.home_key).qpos.copy()
-    for joint in cfg.finger_joints:
-        q[model.joint(joint).qposadr[0]] = opening / 2.0  # a finger joint is its pad's distance from the tool
-    data = cell.world.kinematics(q)
+    data = cell.world.kinematics(_opened(cell, model.key(cfg.home_key).qpos, opening))
     tool = model.site(cfg.tool_site).id
     R_tool, p_tool = data.site_xmat[tool].reshape(3, 3), data.site_xpos[tool]
     corners = []
@@ -94,16 +91,19 @@ def fingers_on_furniture(cell: ArmCell, q: np.ndarray, opening: float) -> str:
     """Which fixture or tote the fingers, ``opening`` m apart, would touch with the arm at ``q`` (nq,), or "".
     Unlike a neighbouring part, these never move out of the way."""
     model, world = cell.model, cell.world
-    furniture = {model.body(f"{name}_fixture").id for name in world.T_world_fixtures}
-    if world.T_world_tote is not None:
-        furniture.add(model.body("tote").id)
-    q = q.copy()
-    for joint in cell.cfg.finger_joints:
-        q[model.joint(joint).qposadr[0]] = opening / 2.0
-    data = world.kinematics(q)
+    furniture = {model.body(name).id for name in world.place_bodies}
+    data = world.kinematics(_opened(cell, q, opening))
     mujoco.mj_collision(model, data)
     for contact in data.contact[: data.ncon]:
         for mine, other in ((contact.geom1, contact.geom2), (contact.geom2, contact.geom1)):
             if contact.dist < 0 and mine in cell.finger_geoms and model.geom_bodyid[other] in furniture:
                 return f"the fingers would land on {model.body(model.geom_bodyid[other]).name}"
     return ""
+
+
+def _opened(cell: ArmCell, q: np.ndarray, opening: float) -> np.ndarray:
+    """A copy of ``q`` (nq,) with the pads ``opening`` m apart: a finger joint is its pad's distance from the tool."""
+    q = q.copy()
+    for joint in cell.cfg.finger_joints:
+        q[cell.model.joint(joint).qposadr[0]] = opening / 2.0
+    return q

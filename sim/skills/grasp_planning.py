@@ -154,8 +154,9 @@ def plan_grasp(cell: ArmCell, part: str, T_est: np.ndarray) -> GraspPlan | NoGra
             reasons.append(f"{grasp.name}{' flipped' if flip else ''}: {exc}")
             continue
         problem = next(filter(None, (configuration_problem(cell, q) for q in (q_pre, q_grasp, q_above, q_place))), "")
-        opening, beside = approach_opening(cell, q_grasp, grasp.width)
-        problem = problem or beside
+        opening = None
+        if not problem:
+            opening, problem = approach_opening(cell, q_grasp, grasp.width)
         if problem:
             reasons.append(f"{grasp.name}{' flipped' if flip else ''}: {problem}")
             continue

@@ -112,7 +112,7 @@ class Perception:
         model = world.model
         base = model.body(world.arm.base_body).id
         self._arm_bodies = np.array([b for b in range(model.nbody) if _descends(model, b, base)])
-        places = [f"{name}_fixture" for name in world.T_world_fixtures] + (["tote"] if world.tote is not None else [])
+        places = world.place_bodies
         self._fixture_bodies = np.array([model.body(name).id for name in places], dtype=np.int64)
         self._places = [_place_volume(world, name) for name in places]
         heights = [standing_height(world.config, world.catalog[p]) for p in world.workpieces]

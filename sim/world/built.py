@@ -80,6 +80,11 @@ class World:
         mujoco.mj_forward(self.model, data)
         return data
 
+    @property
+    def place_bodies(self) -> tuple[str, ...]:
+        """The bodies parts are put in: each fixture (``<body>_fixture``), then the tote when there is one."""
+        return tuple(f"{name}_fixture" for name in self.T_world_fixtures) + (("tote",) if self.tote is not None else ())
+
     def bodies_of(self, part: str) -> tuple[str, ...]:
         """The bodies of the part ``part`` (its instances), in config order; empty for a part not in the world."""
         return tuple(body for body, kind in self.part_types.items() if kind == part)
