@@ -12,16 +12,16 @@ import gymnasium
 import numpy as np
 
 import sim  # noqa: F401  (registers the envs)
-from sim.plans.env import COLOURS, DESTINATIONS
+from sim.plans.env import COLOURS
 
 
 def choose(env, obs, info) -> np.ndarray:
     """The first (slot, destination) that a goal object still wants and the action mask allows; else wait."""
-    models = env.unwrapped.models
+    models, destinations = env.unwrapped.models, env.unwrapped.destinations
     for slot in np.flatnonzero(obs["valid"]):
         model, colour = models[obs["model"][slot]], COLOURS[obs["colour"][slot]]
         for part, wanted_colour, place in info["goal_left"]:
-            d = DESTINATIONS.index(place)
+            d = destinations.index(place)
             if part == model and wanted_colour in (None, colour) and info["action_mask"][slot, d]:
                 return np.array([slot, d])
     return np.array([env.unwrapped.max_objects, 0])

@@ -2,24 +2,27 @@
 and where; the robot does the rest (grasp planning, IK, the protective stop).
 
 Action Space:
-    ``MultiDiscrete([max_objects + 1, 2])``: a slot of the latest look's detections (the last index waits
-    ``WAIT_S`` and looks again), and a destination, ``DESTINATIONS`` ("fixture": the part's own, or
-    "tote"). A move is refused, without moving anything, when the slot is empty, someone is reaching
-    in, or the cell does not put that part there. ``info["action_mask"]`` ((max_objects + 1, 2) int8)
-    marks the moves that would not be refused.
+    ``MultiDiscrete([max_objects + 1, len(destinations)])``: a slot of the latest look's detections (the
+    last index waits ``WAIT_S`` and looks again), and a destination of :attr:`destinations`: ``"fixture"``
+    (the part's own), ``"tote"``, then the fixtures the plan names. A move is refused, without moving
+    anything, when the slot is empty, someone is reaching in, the cell does not put that part there, or
+    the named fixture is another part's or already filled (a part whose fixtures the plan names goes to
+    one of those names, not to ``"fixture"``). ``info["action_mask"]`` ((max_objects + 1,
+    len(destinations)) int8) marks the moves that would not be refused.
 
 Observation Space:
     A ``Dict`` (world frame, metres): per detection slot, padded to ``max_objects``, ``model``
     (index into :attr:`models`), ``pose`` (position and quaternion w, x, y, z; w >= 0), ``score``,
     ``colour`` (index into ``psorr.segment.PALETTE``'s names; the last index is "not named") and
-    ``valid``; ``occupancy`` (2,): the share of the fixtures filled, and of the tote's slots;
+    ``valid``; ``occupancy`` (len(destinations),): the share of the fixtures filled, of the tote's slots,
+    then 1 for each named fixture filled;
     ``holding`` (1,): the gripper holds a part; ``occupied`` (1,): someone is reaching in; ``depth``: the
     latest look's Kinect depth (zeros for an oracle look).
 
 Rewards:
-    +1 for a part placed that the goal wants there (an instance of a goal object's part, in its colour
-    when the goal names one, not yet counted); -1 for a part dropped or placed where the goal does not
-    want it; -0.01 a wait; -0.1 a refused move.
+    +1 for a part placed where the goal wants it (an instance of a goal object's part, in its colour
+    when the goal names one, not yet counted, at the destination the goal names); -1 for a part dropped
+    or placed where the goal does not want it; -0.01 a wait; -0.1 a refused move.
 
 Episode End:
     Terminated when the goal holds (simulator truth: ``info["is_success"]``; ``info["goal_left"]`` lists the
@@ -27,7 +30,8 @@ Episode End:
     ``max_steps`` actions, after ``MAX_EPISODE_S`` of simulated time, or when the workspace stays blocked.
 
 Version History:
-    v1: the plan-level env (objects by detection, destinations). v0 (:mod:`sim.env`) picks by part index.
+    v1: the plan-level env (objects by detection, destinations); the fixtures a plan names are
+    destinations of their own. v0 (:mod:`sim.env`) picks by part index.
 """
 
 from __future__ import annotations
@@ -51,7 +55,7 @@ from sim.plans.plan_file import ProcessPlan, load_plan
 from sim.plans.planning import goal_places
 from sim.world import World, build_world
 
-DESTINATIONS = PLACES  # a detection goes to its part's fixture or to the tote
+DESTINATIONS = PLACES  # a detection goes to its part's fixture or to the tote, or to a fixture the plan names
 COLOURS = (*PALETTE, None)
 PLACE_REWARD, WRONG_REWARD, WAIT_REWARD, REFUSED_REWARD = 1.0, -1.0, -0.01, -0.1
 DEFAULT_MAX_STEPS = 60
@@ -69,7 +73,8 @@ class PlanPickPlaceEnv(gym.Env):
         max_steps: moves after which the episode is truncated; None for no limit of the env's own.
 
     Attributes:
-        models: the part names a slot's ``model`` indexes. world, episode: the current cell and
+        models: the part names a slot's ``model`` indexes. destinations: the names an action's second index
+            takes: ``DESTINATIONS``, then the plan's named fixtures. world, episode: the current cell and
             :class:`Episode`, None before :meth:`reset`.
     """
 
@@ -90,14 +95,16 @@ class PlanPickPlaceEnv(gym.Env):
         self.models = tuple(sorted(set(self.config.workpieces)))
         n = max_objects or len(instance_names(self.config))
         self.max_objects = n
-        self.action_space = spaces.MultiDiscrete([n + 1, len(DESTINATIONS)])
+        self.destinations = (*DESTINATIONS, *(d.name for d in self.plan.destinations))
+        self.action_space = spaces.MultiDiscrete([n + 1, len(self.destinations)])
         hx, hy = (v / 2 + 0.1 for v in self.config.table_size)
         low, high = np.array([-hx, -hy, 0, -1, -1, -1, -1], np.float32), np.array([hx, hy, 2, 1, 1, 1, 1], np.float32)
         self.observation_space = spaces.Dict({
             "model": spaces.MultiDiscrete([len(self.models)] * n), "pose": spaces.Box(np.tile(low, (n, 1)),
                                                                                      np.tile(high, (n, 1))),
             "score": spaces.Box(0.0, 1.0, (n,), np.float32), "colour": spaces.MultiDiscrete([len(COLOURS)] * n),
-            "valid": spaces.MultiBinary(n), "occupancy": spaces.Box(0.0, 1.0, (2,), np.float32),
+            "valid": spaces.MultiBinary(n),
+            "occupancy": spaces.Box(0.0, 1.0, (len(self.destinations),), np.float32),
             "holding": spaces.MultiBinary(1), "occupied": spaces.MultiBinary(1),
             "depth": spaces.Box(0.0, KINECT_V1.depth_range[1], self.config.intrinsics.shape, np.float32),
         })
@@ -106,6 +113,7 @@ class PlanPickPlaceEnv(gym.Env):
         self._slots: list[tuple[str, object]] = []
         self._look = None
         self._counted: set[str] = set()
+        self._filled: dict[str, str] = {}  # named fixture -> the body placed in it
         self._steps = 0
         self._picture = LookPicture()
 
@@ -115,7 +123,7 @@ class PlanPickPlaceEnv(gym.Env):
         self.world = build_world(self.config, self.np_random)
         colours = any(obj.colour for obj, _ in self.goal.values())
         self.episode = Episode(self.world, self.np_random, self.poses, self.occluder, colours=colours)
-        self._counted, self._steps = set(), 0
+        self._counted, self._filled, self._steps = set(), {}, 0
         self._take_look()
         return self._observation(), self._info()
 
@@ -123,9 +131,9 @@ class PlanPickPlaceEnv(gym.Env):
         if self.episode is None:
             raise ResetNeededError("call reset() before step()")
         if not self.action_space.contains(np.asarray(action)):
-            raise SimInputError(f"action must be [slot in 0..{self.max_objects}, destination in 0..1] "
-                                f"({', '.join(DESTINATIONS)}); got {action!r}")
-        slot, where = int(action[0]), DESTINATIONS[int(action[1])]
+            raise SimInputError(f"action must be [slot in 0..{self.max_objects}, destination in "
+                                f"0..{len(self.destinations) - 1}] ({', '.join(self.destinations)}); got {action!r}")
+        slot, where = int(action[0]), self.destinations[int(action[1])]
         self._steps += 1
         reward, refused, pick, gave_up = 0.0, "", None, ""
         try:
@@ -138,7 +146,7 @@ class PlanPickPlaceEnv(gym.Env):
             else:
                 body, estimate = self._slots[slot]
                 pick = self.episode.pick(body, estimate.T_world_part, alternatives=estimate.alternatives)
-                reward = self._reward(pick)
+                reward = self._reward(pick, where)
                 self._take_look()
         except WorkspaceBlockedError as exc:
             gave_up = str(exc)
@@ -175,25 +183,34 @@ class PlanPickPlaceEnv(gym.Env):
         if self._look.occupied:
             return "someone is reaching over the table: wait and look again"
         body = self._slots[slot][0]
-        if self.world.places.get(body) != where:
-            return f"the cell puts {self.world.part_types[body]} in {self.world.places.get(body)}, not in {where}"
+        part, named = self.world.part_types[body], self.plan.destination(where)
+        if self.world.places.get(body) != self.plan.kind(where):
+            return f"the cell puts {part} in {self.world.places.get(body)}, not in {where}"
+        if named is not None and named.part != part:
+            return f"{where} is a fixture for {named.part}, not for {part}"
+        if named is not None and where in self._filled:
+            return f"{where} is occupied: {self._filled[where]} was placed there"
+        if where == "fixture" and any(d.part == part for d in self.plan.destinations):
+            return f"the plan names the {part} fixtures: send it to one of them"
         return ""
 
-    def _reward(self, pick) -> float:
+    def _reward(self, pick, where: str) -> float:
         if not pick.placed:
             return WRONG_REWARD
-        name = self._goal_object_for(pick.part)
+        if self.plan.destination(where) is not None:
+            self._filled[where] = pick.part
+        name = self._goal_object_for(pick.part, where)
         if name is None:
             return WRONG_REWARD
         self._counted.add(name)
         return PLACE_REWARD
 
-    def _goal_object_for(self, body: str) -> str | None:
-        """The goal object not yet counted that ``body`` (truth: its part and colour) satisfies, if any."""
+    def _goal_object_for(self, body: str, where: str) -> str | None:
+        """The goal object not yet counted that ``body`` (truth: its part and colour) placed at ``where``
+        satisfies, if any."""
         kind, colour = self.world.part_types[body], self.world.colour_name(body)
         for name, (obj, place) in self.goal.items():
-            if name not in self._counted and obj.part == kind and obj.colour in (None, colour) \
-                    and self.world.places[body] == place:
+            if name not in self._counted and obj.part == kind and obj.colour in (None, colour) and place == where:
                 return name
         return None
 
@@ -228,13 +245,14 @@ class PlanPickPlaceEnv(gym.Env):
         for where in DESTINATIONS:
             bodies = [b for b in places if places[b] == where]
             out.append(sum(b in placed for b in bodies) / len(bodies) if bodies else 0.0)
+        out += [float(d.name in self._filled) for d in self.plan.destinations]
         return np.array(out, np.float32)
 
     def _info(self, pick=None, refused: str = "", gave_up: str = "") -> dict:
-        mask = np.zeros((self.max_objects + 1, len(DESTINATIONS)), np.int8)
+        mask = np.zeros((self.max_objects + 1, len(self.destinations)), np.int8)
         mask[-1] = 1
         for slot in range(self.max_objects):
-            for d, where in enumerate(DESTINATIONS):
+            for d, where in enumerate(self.destinations):
                 mask[slot, d] = not self._refusal(slot, where)
         left = [(obj.part, obj.colour, place) for name, (obj, place) in self.goal.items() if name not in self._counted]
         return {"is_success": self._goal_holds(), "action_mask": mask, "goal_left": left, "pick": pick,

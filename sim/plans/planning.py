@@ -2,8 +2,9 @@
 
 Types ``part`` (a plan's symbolic objects) and ``location``; fluents ``on_table(p)``, ``holding(p)``,
 ``hand_empty``, ``in(p, l)``, ``free(l)``, and the static ``fits(p, l)``; actions ``pick(p)`` and
-``place(p, l)``. Each object has a place of its own: the fixture the cell builds for its part, or its
-slot in the tote, as the task places the part; a goal that sends it elsewhere cannot be reached.
+``place(p, l)``. Each object has a place of its own: the fixture the cell builds for its part, a fixture
+the plan names (which holds one part: a second object wanted there finds it occupied), or its slot in
+the tote, as the task places the part; a goal that sends it elsewhere cannot be reached.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ ENGINE = "pyperplan"
 @dataclass(frozen=True)
 class Step:
     """One action of a plan: ``pick(object)`` (place None) or ``place(object, place)``, place being
-    ``"fixture"`` or ``"tote"``."""
+    ``"fixture"``, ``"tote"`` or a fixture the plan names."""
 
     action: str
     object: str
@@ -29,16 +30,20 @@ class Step:
 
 def goal_places(plan: ProcessPlan) -> dict[str, tuple[PlanObject, str]]:
     """Object name -> (object, the place the goal wants it in), refusing a goal at odds with itself or with
-    the cell: one object wanted in two places, or a part sent where the cell does not put it."""
+    the cell: a part sent where the cell does not put it, or two objects wanted in one named fixture."""
     from sim.world.parts import instance_names, places
 
     cell = {instance_names(plan.task.world)[body]: where for body, where in places(plan.task.world).items()}
     wanted: dict[str, tuple[PlanObject, str]] = {}
     for goal in plan.goal:
-        name = _name(goal, wanted)
-        if cell.get(goal.object.part) != goal.place:
-            raise UnreachableGoalError(f"{plan.path}: in({goal.object.wanted}, {goal.place}) cannot be reached: the "
+        name, term = _name(goal, wanted), f"in({goal.object.wanted}, {goal.place})"
+        if cell.get(goal.object.part) != plan.kind(goal.place):
+            raise UnreachableGoalError(f"{plan.path}: {term} cannot be reached: the "
                                        f"cell puts {goal.object.part} in {_article(cell[goal.object.part])}")
+        held = next((obj for obj, place in wanted.values() if place == goal.place), None)
+        if held is not None and plan.destination(goal.place) is not None:
+            raise UnreachableGoalError(f"{plan.path}: {term} cannot be reached: {goal.place} holds one part, and "
+                                       f"the goal has already put {held.wanted} there")
         wanted[name] = (goal.object, goal.place)
     return wanted
 
@@ -92,7 +97,9 @@ def problem(objects: dict[str, tuple[PlanObject, str]], placed: frozenset[str] =
 
 
 def _place_name(name: str, where: str) -> str:
-    return f"{name}_{'fixture' if where == 'fixture' else 'tote_slot'}"
+    """The place's object: the part's own fixture or tote slot, or a named fixture (one for every object
+    wanted there)."""
+    return {"fixture": f"{name}_fixture", "tote": f"{name}_tote_slot"}.get(where, where)
 
 
 def solve(objects: dict[str, tuple[PlanObject, str]], placed: frozenset[str] = frozenset(),

@@ -9,7 +9,7 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 import sim  # noqa: F401  (registers the envs)
-from sim.plans.env import COLOURS, DESTINATIONS, PLACE_REWARD, WRONG_REWARD, PlanPickPlaceEnv
+from sim.plans.env import COLOURS, PLACE_REWARD, WRONG_REWARD, PlanPickPlaceEnv
 
 REPO = Path(__file__).resolve().parents[3]
 PLAN = REPO / "tasks" / "plans" / "red_hub.yaml"
@@ -24,9 +24,9 @@ def test_check_env_passes_without_warnings():
     assert not [w for w in caught if "gymnasium" in str(w.filename)], [str(w.message) for w in caught]
 
 
-def _slot(obs, env, part, colour):
+def _slot(obs, env, part, colour="any"):
     for slot in np.flatnonzero(obs["valid"]):
-        if env.models[obs["model"][slot]] == part and COLOURS[obs["colour"][slot]] == colour:
+        if env.models[obs["model"][slot]] == part and colour in ("any", COLOURS[obs["colour"][slot]]):
             return int(slot)
     pytest.fail(f"no {colour} {part} in the observation")
 
@@ -38,28 +38,39 @@ def env():
     env.close()
 
 
-def test_the_red_hub_in_its_fixture_reaches_the_goal(env):
+def test_the_red_hub_in_its_named_fixture_reaches_the_goal(env):
     obs, info = env.reset(seed=0)
-    assert info["goal_left"] == [("hub", "red", "fixture")] and not info["is_success"]
-    obs, reward, terminated, truncated, info = env.step([_slot(obs, env, "hub", "red"), 0])
+    assert env.destinations == ("fixture", "tote", "fixture_b")
+    assert info["goal_left"] == [("hub", "red", "fixture_b")] and not info["is_success"]
+    obs, reward, terminated, truncated, info = env.step([_slot(obs, env, "hub", "red"), 2])
     assert reward == PLACE_REWARD and terminated and not truncated and info["is_success"]
-    assert obs["occupancy"][DESTINATIONS.index("fixture")] > 0
+    # one of the three fixtures (the hubs' and the transformer's) filled, none of the tote, and fixture_b
+    assert obs["occupancy"].tolist() == pytest.approx([1 / 3, 0.0, 1.0])
 
 
-def test_the_blue_twin_is_not_what_the_goal_wants(env):
+def test_the_blue_twin_is_not_what_the_goal_wants_and_fills_the_fixture(env):
     obs, _ = env.reset(seed=0)
-    obs, reward, terminated, _, info = env.step([_slot(obs, env, "hub", "blue"), 0])
-    assert reward == WRONG_REWARD and not terminated and info["goal_left"] == [("hub", "red", "fixture")]
+    obs, reward, terminated, _, info = env.step([_slot(obs, env, "hub", "blue"), 2])
+    assert reward == WRONG_REWARD and not terminated and info["goal_left"] == [("hub", "red", "fixture_b")]
+    red = _slot(obs, env, "hub", "red")
+    assert info["action_mask"][red, 2] == 0
+    _, reward, _, _, info = env.step([red, 2])
+    assert reward < 0 and "fixture_b is occupied" in info["refused"]
 
 
 def test_a_move_the_mask_forbids_is_refused_without_moving():
     env = PlanPickPlaceEnv(PLAN, poses="oracle", occluder=False, max_objects=5)
     obs, info = env.reset(seed=0)
     slot = _slot(obs, env, "hub", "red")
-    assert info["action_mask"][slot, DESTINATIONS.index("tote")] == 0  # the cell puts hubs in fixtures
+    assert info["action_mask"][slot].tolist() == [0, 0, 1]  # hubs go to fixtures, and this plan names theirs
     time = info["sim_time"]
-    _, reward, _, _, info = env.step([slot, DESTINATIONS.index("tote")])
+    _, reward, _, _, info = env.step([slot, env.destinations.index("tote")])
     assert reward < 0 and "puts hub in fixture" in info["refused"] and info["sim_time"] == time
+    _, _, _, _, info = env.step([slot, env.destinations.index("fixture")])
+    assert "the plan names the hub fixtures" in info["refused"] and info["sim_time"] == time
+    transformer = _slot(obs, env, "transformer")
+    _, _, _, _, info = env.step([transformer, 2])
+    assert "fixture_b is a fixture for hub, not for transformer" in info["refused"]
     empty = env.max_objects - 1
     _, _, _, _, info = env.step([empty, 0])
     assert "holds no detection" in info["refused"]

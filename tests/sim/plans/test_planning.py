@@ -14,10 +14,12 @@ from sim.plans.planning import check_actions
 REPO = Path(__file__).resolve().parents[3]
 
 
-def _plan(tmp_path, goal: str, actions: str = "", task: str = "workpieces: [chassis, transformer]\n"):
+def _plan(tmp_path, goal: str, actions: str = "", task: str = "workpieces: [chassis, transformer]\n",
+          destinations: str = ""):
     (tmp_path / "cell.yaml").write_text(task)
     path = tmp_path / "plan.yaml"
-    path.write_text(f"task: cell.yaml\ngoal:\n{goal}" + (f"actions:\n{actions}" if actions else ""))
+    named = f"destinations:\n{destinations}" if destinations else ""
+    path.write_text(f"task: cell.yaml\n{named}goal:\n{goal}" + (f"actions:\n{actions}" if actions else ""))
     return load_plan(path)
 
 
@@ -83,4 +85,29 @@ def test_the_domain_and_problem_are_written_as_pddl(tmp_path):
     domain, problem = write_pddl(goal_places(plan), tmp_path / "pddl")
     assert "(:action pick" in domain.read_text() and "(:action place" in domain.read_text()
     text = problem.read_text()
-    assert "red_hub - part" in text and "(in red_hub red_hub_fixture)" in text
+    assert "red_hub - part" in text and "fixture_b - location" in text and "(in red_hub fixture_b)" in text
+
+
+def test_named_fixtures_are_places_of_their_own(tmp_path):
+    plan = _plan(tmp_path, "  - in(transformer, fixture_a)\n  - in(chassis, fixture_b)\n",
+                 destinations="  fixture_a: transformer\n  fixture_b: chassis\n")
+    assert solve(goal_places(plan)) == (Step("pick", "transformer"), Step("place", "transformer", "fixture_a"),
+                                        Step("pick", "chassis"), Step("place", "chassis", "fixture_b"))
+
+
+def test_a_named_fixture_wanted_for_two_parts_is_refused_as_occupied(tmp_path):
+    import trimesh
+
+    trimesh.creation.box((0.04, 0.03, 0.02)).export(tmp_path / "block.stl")
+    plan = _plan(tmp_path, "  - in(red block, fixture_b)\n  - in(blue block, fixture_b)\n",
+                 task="workpieces:\n  - mesh: block.stl\n    count: 2\n    color: [red, blue]\n",
+                 destinations="  fixture_b: block\n  fixture_c: block\n")
+    with pytest.raises(UnreachableGoalError, match="in\\(blue block, fixture_b\\) cannot be reached: fixture_b "
+                                                   "holds one part, and the goal has already put red block there"):
+        goal_places(plan)
+
+
+def test_a_person_placing_in_a_named_fixture_is_checked_like_any_place(tmp_path):
+    plan = _plan(tmp_path, "  - in(chassis, fixture_b)\n", "  - pick(chassis)\n  - place(chassis, fixture_b)\n",
+                 destinations="  fixture_b: chassis\n")
+    assert check_actions(plan, goal_places(plan))[-1] == Step("place", "chassis", "fixture_b")
