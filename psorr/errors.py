@@ -32,3 +32,7 @@ class AssetError(CloudFileError):
 
 class MissingExtraError(PsorrError, ImportError):
     """An optional feature's library is not installed. The message names the extra that installs it."""
+
+
+class ViewerError(PsorrError):
+    """The Rerun viewer a recording streams to cannot be started or reached. The message names the fix."""

@@ -3,9 +3,10 @@ that both the recognizer's and the simulator's recorders write to."""
 
 from __future__ import annotations
 
-from psorr.errors import MissingExtraError
+from psorr.errors import MissingExtraError, ViewerError
 
 VIZ_EXTRA = "pip install 'psorr[viz]'"
+_NO_VIEWER_FIX = f"install the viewer ({VIZ_EXTRA} puts `rerun` on the PATH), or record into a file: --rerun OUT.rrd"
 
 
 def import_rerun():
@@ -16,6 +17,10 @@ def import_rerun():
         raise MissingExtraError(f"recording for the Rerun viewer needs rerun-sdk, which is not installed: "
                                 f"{VIZ_EXTRA}") from None
     return rerun
+
+
+def _first_line(exc: Exception) -> str:
+    return str(exc).splitlines()[0].rstrip(".") if str(exc) else type(exc).__name__
 
 
 class RerunStream:
@@ -37,13 +42,26 @@ class RerunStream:
             if path is not None:
                 recording.save(str(path))
             else:
-                recording.spawn()
+                self._spawn(recording)
         self.recording = recording
+
+    @staticmethod
+    def _spawn(recording) -> None:
+        try:
+            recording.spawn()
+        except RuntimeError as exc:  # no `rerun` on the PATH
+            raise ViewerError(f"cannot start the Rerun viewer: {_first_line(exc)}; {_NO_VIEWER_FIX}") from None
 
     def close(self) -> None:
         """Flush what is recorded to its file or viewer, and finish the file (a recording passed in is the
         caller's to finish)."""
-        self.recording.flush()
+        try:
+            self.recording.flush()
+        except RuntimeError as exc:  # the spawned viewer never answered, or went away
+            if self._own:
+                self.recording.disconnect()
+            raise ViewerError(f"the Rerun viewer did not take the recording: {_first_line(exc)}; "
+                              f"{_NO_VIEWER_FIX}") from None
         if self._own:
             self.recording.disconnect()
 

@@ -122,3 +122,64 @@ def test_stages_report_nothing_after_the_recognition(scene_and_library):
     from psorr.viz.observer import observer, watched
 
     assert not watched() and type(observer()) is RecognitionObserver
+
+
+def _kill_processes_naming(text: str) -> None:
+    """Stop every process whose command line holds ``text`` (the spawned viewer detaches from its parent)."""
+    import os
+    import signal
+    from pathlib import Path
+
+    for cmdline in Path("/proc").glob("[0-9]*/cmdline"):
+        try:
+            if text in cmdline.read_bytes().decode(errors="replace"):
+                os.kill(int(cmdline.parent.name), signal.SIGTERM)
+        except (OSError, ValueError):
+            pass
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="stands a shell script in for the viewer")
+def test_rerun_without_a_file_streams_to_a_viewer_it_spawns(tmp_path):
+    """``--rerun`` alone spawns ``rerun`` from PATH and streams to it. The viewer here is Rerun's own command
+    with ``--save`` added, so that what it receives is written to a file instead of drawn on a display."""
+    import os
+    import time
+
+    pytest.importorskip("rerun")
+    received = tmp_path / "received.rrd"
+    viewer = tmp_path / "bin" / "rerun"
+    viewer.parent.mkdir()
+    # Its output to /dev/null: it outlives the command, whose pipes it would otherwise hold open.
+    viewer.write_text(f'#!/bin/sh\nexec "{sys.executable}" -m rerun_cli "$@" --save "{received}" '
+                      '</dev/null >/dev/null 2>&1\n')
+    viewer.chmod(0o755)
+    write_cloud(tmp_path / "scene.pcd", synthetic.box_on_table(np.random.default_rng(0)).cloud)
+    env = {**os.environ, "PATH": f"{viewer.parent}{os.pathsep}{os.environ['PATH']}"}
+    try:
+        out = subprocess.run([sys.executable, "-m", "psorr.cli", "decompose", str(tmp_path / "scene.pcd"), "--json",
+                              "--rerun"], capture_output=True, text=True, timeout=120, env=env)
+        assert out.returncode == 0, out.stderr
+        primitives = len(json.loads(out.stdout)["primitives"])
+        boxes = None
+        for _ in range(40):  # the viewer writes what it has received as it arrives
+            if received.exists():
+                rows = _entities(received)
+                if "/recognition/decomposition/scene/boxes" in rows:
+                    boxes = _count(rows["/recognition/decomposition/scene/boxes"], "Boxes3D:centers")
+                    break
+            time.sleep(0.25)
+        assert boxes == primitives
+    finally:
+        _kill_processes_naming(str(received))
+
+
+def test_rerun_without_a_file_and_no_viewer_is_one_line_naming_the_fix(tmp_path):
+    import os
+
+    pytest.importorskip("rerun")
+    write_cloud(tmp_path / "scene.pcd", synthetic.box_on_table(np.random.default_rng(0)).cloud)
+    env = {**os.environ, "PATH": str(tmp_path)}  # no `rerun` to spawn
+    out = subprocess.run([sys.executable, "-m", "psorr.cli", "decompose", str(tmp_path / "scene.pcd"), "--rerun"],
+                         capture_output=True, text=True, timeout=120, env=env)
+    assert out.returncode == 2 and "Traceback" not in out.stderr
+    assert "cannot start the Rerun viewer" in out.stderr and "--rerun OUT.rrd" in out.stderr
