@@ -24,6 +24,11 @@ Rewards:
     when the goal names one, not yet counted, at the destination the goal names); -1 for a part dropped
     or placed where the goal does not want it; -0.01 a wait; -0.1 a refused move.
 
+Rendering:
+    ``render_mode="rgb_array"``: the latest look's Kinect RGB (H, W, 3) uint8; ``"depth_array"``: its depth
+    (H, W) float32 in metres, 0 where the sensor measured nothing. For an oracle look, which takes no
+    picture, the cell as the camera sees it now (its depth without noise).
+
 Episode End:
     Terminated when the goal holds (simulator truth: ``info["is_success"]``; ``info["goal_left"]`` lists the
     goal objects not placed yet, as (part, colour or None, destination)); truncated after
@@ -31,7 +36,7 @@ Episode End:
 
 Version History:
     v1: the plan-level env (objects by detection, destinations); the fixtures a plan names are
-    destinations of their own. v0 (:mod:`sim.env`) picks by part index.
+    destinations of their own; ``depth_array`` rendering. v0 (:mod:`sim.env`) picks by part index.
 """
 
 from __future__ import annotations
@@ -68,7 +73,7 @@ class PlanPickPlaceEnv(gym.Env):
         plan: a plan file (``tasks/plans/*.yaml``) or a :class:`ProcessPlan`.
         poses: ``"recognized"`` (PSORR on the Kinect's cloud) or ``"oracle"``.
         occluder: a person reaches over the table now and then.
-        render_mode: None or ``"rgb_array"``.
+        render_mode: None, ``"rgb_array"`` or ``"depth_array"``.
         max_objects: detection slots; default: the task's part instances.
         max_steps: moves after which the episode is truncated; None for no limit of the env's own.
 
@@ -78,7 +83,7 @@ class PlanPickPlaceEnv(gym.Env):
             :class:`Episode`, None before :meth:`reset`.
     """
 
-    metadata = {"render_modes": ["rgb_array"], "render_fps": 1}
+    metadata = {"render_modes": ["rgb_array", "depth_array"], "render_fps": 1}
 
     def __init__(self, plan: str | os.PathLike | ProcessPlan, poses: PoseSource | str = PoseSource.RECOGNIZED,
                  occluder: bool = True, render_mode: str | None = None, max_objects: int | None = None,
@@ -156,12 +161,15 @@ class PlanPickPlaceEnv(gym.Env):
         return self._observation(), float(reward), success, truncated, self._info(pick, refused, gave_up)
 
     def render(self):
-        """The Kinect RGB (H, W, 3) uint8 of the latest look; for a look without a picture, the cell now."""
+        """The latest look's Kinect RGB (H, W, 3) uint8, or with ``render_mode="depth_array"`` its depth (H, W)
+        float32 (m); for a look without a picture, the cell now."""
         if self.render_mode is None:
             gym.logger.warn("render() was called without a render_mode: make the env with render_mode='rgb_array'")
             return None
         if self._look is None:
             raise ResetNeededError("call reset() before render()")
+        if self.render_mode == "depth_array":
+            return self._picture.depth(self._look, self.world)
         return self._picture.render(self._look, self.world)
 
     def close(self) -> None:

@@ -75,3 +75,23 @@ def test_a_move_the_mask_forbids_is_refused_without_moving():
     _, _, _, _, info = env.step([empty, 0])
     assert "holds no detection" in info["refused"]
     env.close()
+
+
+def test_depth_array_renders_the_looks_depth_or_the_cell_now():
+    from gymnasium.utils.passive_env_checker import env_render_passive_checker
+
+    seen = PlanPickPlaceEnv(PLAN, poses="recognized", occluder=False, render_mode="depth_array")
+    obs, _ = seen.reset(seed=0)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        depth = env_render_passive_checker(seen)
+    assert not caught, [str(w.message) for w in caught]
+    assert depth.dtype == np.float32 and np.array_equal(depth, obs["depth"])  # the Kinect's, noise and all
+    seen.close()
+    true = PlanPickPlaceEnv(PLAN, poses="oracle", occluder=False, render_mode="depth_array")
+    obs, _ = true.reset(seed=0)
+    depth = true.render()
+    assert not obs["depth"].any()  # an oracle look takes no picture: the cell is rendered now
+    assert depth.shape == obs["depth"].shape and depth.dtype == np.float32
+    assert 0.5 < float(np.median(depth)) < 1.5  # metres: the table, as far as the camera stands
+    true.close()
