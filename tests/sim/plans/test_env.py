@@ -95,3 +95,19 @@ def test_depth_array_renders_the_looks_depth_or_the_cell_now():
     assert depth.shape == obs["depth"].shape and depth.dtype == np.float32
     assert 0.5 < float(np.median(depth)) < 1.5  # metres: the table, as far as the camera stands
     true.close()
+
+
+def test_the_env_runs_vectorised_in_both_modes_and_they_agree():
+    """gymnasium.make_vec, sync and async (worker processes): the same seeds give the same observations."""
+    seen = {}
+    for mode in ("sync", "async"):
+        envs = gymnasium.make_vec("psorr/PickPlace-v1", num_envs=2, vectorization_mode=mode, plan=PLAN,
+                                  poses="oracle", occluder=False)
+        obs, _ = envs.reset(seed=0)
+        wait = np.array([[envs.single_action_space.nvec[0] - 1, 0]] * 2)
+        obs, reward, terminated, truncated, info = envs.step(wait)
+        envs.close()
+        assert reward.tolist() == [-0.01, -0.01] and not terminated.any() and not info["is_success"].any()
+        seen[mode] = obs
+    for key in seen["sync"]:
+        assert np.array_equal(seen["sync"][key], seen["async"][key]), key
