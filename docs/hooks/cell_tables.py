@@ -108,3 +108,14 @@ def soak() -> str:
     return out + (f"\n\n{data['episodes']} episodes on {data['workers']} workers in {data['wall_s'] / 60:.0f} min: "
                   f"{len(data['crashes'])} crashed, {data['lost']} lost, memory "
                   f"{'flat' if data['flat'] else 'growing'}; failed picks: {failed}.")
+
+
+def part_derivation() -> str:
+    """benchmarks/part_derivation.py: a new part's hulls and grasps from an empty cache, and the cached call."""
+    data = load("part_derivation")
+    rows = [[r["part"], f"{r['hulls_s']:.1f}", f"{r['grasps_s']:.1f}", f"{r['total_s']:.1f}", f"{r['cached_ms']:.0f}",
+             r["hulls"], r["grasps"]] for r in data["rows"]]
+    over = [r["part"] for r in data["rows"] if r["total_s"] >= data["target_s"]]
+    verdict = "met" if not over else f"missed by {', '.join(over)}"
+    return table(["part", "hulls s", "grasps s", "in all s", "cached ms", "hulls", "grasps"], rows, "lrrrrrr") + (
+        f"\n\n{data['conditions']}; target under {data['target_s']:.0f} s a new part: {verdict}")

@@ -93,7 +93,7 @@ TABLES = {
     "grasp-tolerance": cell.grasp_tolerance,
     "episodes": cell.episodes, "episodes-per-part": cell.episodes_per_part, "episodes-in-hand": cell.episodes_in_hand,
     **cell.task_tables("clutter"), **cell.task_tables("printed_parts"), "plans": cell.plans,
-    "sweep-throughput": cell.sweep_throughput, "soak": cell.soak,
+    "sweep-throughput": cell.sweep_throughput, "soak": cell.soak, "part-derivation": cell.part_derivation,
     "headline": headline,
     "decisions": decisions,
 }
