@@ -23,8 +23,8 @@ REPO = Path(__file__).resolve().parents[2]
 SCENE = 5
 WINDOW = "1200x760"
 WIDTH = 1200  # px of the saved picture (the viewer renders at twice the window's size)
-UP = [0.0, -1.0, 0.0]
-FINE_RADIUS = 0.0003  # m  # the cloud's frame is OpenCV's: y points down
+UP = [0.0, -1.0, 0.0]  # the cloud's frame is OpenCV's: y points down
+FINE_RADIUS = 0.0003  # m: the cloud's points as drawn in the first picture
 
 
 def shots(bracket: np.ndarray, centre: np.ndarray, meshes: list[str]) -> dict:

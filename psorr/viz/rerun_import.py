@@ -58,12 +58,11 @@ class RerunStream:
         try:
             self.recording.flush()
         except RuntimeError as exc:  # the spawned viewer never answered, or went away
-            if self._own:
-                self.recording.disconnect()
             raise ViewerError(f"the Rerun viewer did not take the recording: {_first_line(exc)}; "
                               f"{_NO_VIEWER_FIX}") from None
-        if self._own:
-            self.recording.disconnect()
+        finally:
+            if self._own:
+                self.recording.disconnect()
 
     def __enter__(self):
         return self

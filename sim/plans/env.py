@@ -56,7 +56,7 @@ from sim.episode import MAX_EPISODE_S, Episode
 from sim.errors import ResetNeededError, SimInputError, WorkspaceBlockedError
 from sim.modes import PoseSource, parse_mode
 from sim.parts.source import PLACES
-from sim.plans.plan_file import ProcessPlan, load_plan
+from sim.plans.plan_file import ProcessPlan, load_plan, named_place_problem
 from sim.plans.planning import goal_places
 from sim.world import World, build_world
 
@@ -191,15 +191,14 @@ class PlanPickPlaceEnv(gym.Env):
         if self._look.occupied:
             return "someone is reaching over the table: wait and look again"
         body = self._slots[slot][0]
-        part, named = self.world.part_types[body], self.plan.destination(where)
+        part = self.world.part_types[body]
         if self.world.places.get(body) != self.plan.kind(where):
             return f"the cell puts {part} in {self.world.places.get(body)}, not in {where}"
-        if named is not None and named.part != part:
-            return f"{where} is a fixture for {named.part}, not for {part}"
-        if named is not None and where in self._filled:
+        problem = named_place_problem(self.plan.destinations, part, where)
+        if problem is not None:
+            return f"{problem[0]} ({problem[1]})"
+        if where in self._filled:
             return f"{where} is occupied: {self._filled[where]} was placed there"
-        if where == "fixture" and any(d.part == part for d in self.plan.destinations):
-            return f"the plan names the {part} fixtures: send it to one of them"
         return ""
 
     def _reward(self, pick, where: str) -> float:

@@ -145,9 +145,9 @@ def _destinations(path: Path, spec, task: Task) -> tuple[Destination, ...]:
         if "fixture" not in (where[b] for b, t in types.items() if t == part):
             raise TaskFileError(path, f"line {line}: {name}: the cell puts {part} in the tote, not in a fixture",
                                 "send it to tote, or rest it upright in the task")
-        if sum(d.part == part for d in out) >= sum(t == part for t in types.values()):
-            raise TaskFileError(path, f"line {line}: {name}: the cell builds only "
-                                f"{sum(t == part for t in types.values())} {part} fixture(s)",
+        instances = sum(t == part for t in types.values())
+        if sum(d.part == part for d in out) >= instances:
+            raise TaskFileError(path, f"line {line}: {name}: the cell builds only {instances} {part} fixture(s)",
                                 f"name no more {part} fixtures than the task has {part}s")
         out.append(Destination(name, part))
     return tuple(out)
@@ -192,15 +192,24 @@ def _object(path: Path, text: str, line: int, task: Task) -> PlanObject:
     return PlanObject(part, colour)
 
 
+def named_place_problem(named: tuple[Destination, ...], part: str, place: str) -> tuple[str, str] | None:
+    """(problem, fix) when the plan's named fixtures rule out ``part`` going to ``place``: a named fixture made
+    for another part, or ``"fixture"`` for a part whose fixtures the plan names; else None."""
+    mine = [d.name for d in named if d.part == part]
+    other = next((d.part for d in named if d.name == place and d.part != part), None)
+    if other is not None:
+        return (f"{place} is a fixture for {other}, not for {part}",
+                f"send {part} to {' or '.join(mine) or 'fixture or tote'}")
+    if place == "fixture" and mine:
+        return f"the plan names the {part} fixtures", f"say which: {' or '.join(mine)}"
+    return None
+
+
 def _place(path: Path, text: str, line: int, obj: PlanObject, named: tuple[Destination, ...]) -> str:
     names = [d.name for d in named]
     if text not in PLACES and text not in names:
         raise TaskFileError(path, f"line {line}: {text!r} is not a place", f"places are {', '.join((*names, *PLACES))}")
-    mine = [d.name for d in named if d.part == obj.part]
-    if text in names and text not in mine:
-        raise TaskFileError(path, f"line {line}: {text} is a fixture for {named[names.index(text)].part}, not for "
-                            f"{obj.part}", f"send {obj.part} to {' or '.join(mine) or 'fixture or tote'}")
-    if text == "fixture" and mine:
-        raise TaskFileError(path, f"line {line}: the plan names the {obj.part} fixtures",
-                            f"say which: {' or '.join(mine)}")
+    problem = named_place_problem(named, obj.part, text)
+    if problem is not None:
+        raise TaskFileError(path, f"line {line}: {problem[0]}", problem[1])
     return text
