@@ -26,6 +26,7 @@ import sim
 from psorr.io import read_mesh
 from sim.errors import CollisionHullError, SimInputError
 from sim.parts.coacd_worker import MISSING_COACD, STALLED, load_mesh
+from sim.parts.simplify import simplified
 
 RECORD = "collision.json"
 _REPAIR = "repair the mesh (it must be closed) or simplify it (fewer faces)"
@@ -49,6 +50,8 @@ class CollisionParams:
         remesh_resolution: cells across the part's largest extent of CoACD's remeshing (its
             ``preprocess_resolution``), which makes an open mesh closed and closes gaps narrower than a
             cell (1.75 mm of a 70 mm part).
+        simplify: the search runs on the part decimated as far as it stays closed and within this share of
+            ``concavity`` of the part's surface (:mod:`sim.parts.simplify`; 0 searches the mesh as it is).
         max_rounds: CoACD cuts every piece still too concave once a round; a search needing more rounds is
             slicing one piece ever thinner (narrow gaps do that) and is stopped, and the part remeshed.
         seed: CoACD's seed; equal settings give equal hulls.
@@ -64,6 +67,7 @@ class CollisionParams:
     mcts_iterations: int = 60
     mcts_nodes: int = 10
     remesh_resolution: int = 40
+    simplify: float = 0.2
     max_rounds: int = 20
     seed: int = 0
     timeout_s: float = 300.0
@@ -79,6 +83,8 @@ class CollisionParams:
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise SimInputError(f"{name} must be a whole number of at least 1, got {value!r}")
+        if not 0 <= self.simplify < 1:
+            raise SimInputError(f"simplify must be a share of concavity in [0, 1), got {self.simplify!r}")
         if not self.timeout_s > 0:
             raise SimInputError(f"timeout_s must be a positive number of seconds, got {self.timeout_s!r}")
 
@@ -105,7 +111,8 @@ def collision_hulls(mesh_path: Path, out_dir: Path, params: CollisionParams = Co
         mesh_path: an STL (or OBJ, PLY) in metres, in the part's model frame.
         out_dir: this mesh's folder of derived files (the caller's choice, e.g. named by the mesh's hash).
             Gets ``hull_<k>.stl`` (binary STL, metres, largest hull first) and ``collision.json``
-            ``{"source_sha256", "settings", "files", "seconds", "coacd_version", "remeshed", "rounds"}``.
+            ``{"source_sha256", "settings", "files", "seconds", "coacd_version", "remeshed", "rounds",
+            "searched_faces"}``.
         params: CoACD's settings.
 
     Returns:
@@ -120,7 +127,8 @@ def collision_hulls(mesh_path: Path, out_dir: Path, params: CollisionParams = Co
     read_mesh(mesh_path)  # refuses a file that is no mesh, naming it and the fix
     mesh = load_mesh(mesh_path)
     source_sha256 = hashlib.sha256(mesh_path.read_bytes()).hexdigest()
-    settings = {**coacd_settings(mesh, params), "max_rounds": params.max_rounds}
+    settings = {**coacd_settings(mesh, params), "max_rounds": params.max_rounds,
+                "simplify_tolerance": round(params.simplify * params.concavity, 6)}
     cached = _cached(out_dir, source_sha256, settings)
     if cached is not None:
         return cached
@@ -130,14 +138,15 @@ def collision_hulls(mesh_path: Path, out_dir: Path, params: CollisionParams = Co
     scratch = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.", dir=out_dir.parent))
     try:
         start = time.perf_counter()
+        search_path, searched_faces = _search_mesh(mesh, mesh_path, scratch, settings["simplify_tolerance"])
         try:
-            summary = _decompose(mesh_path, scratch, settings, start + params.timeout_s)
+            summary = _decompose(mesh_path, search_path, scratch, settings, start + params.timeout_s)
         except subprocess.TimeoutExpired:
             raise CollisionHullError(mesh_path, f"CoACD's convex decomposition took longer than {params.timeout_s:g} s "
                                      "and was stopped", f"{_REPAIR}, or raise CollisionParams.timeout_s") from None
         record = {"source_sha256": source_sha256, "settings": settings, "files": summary["files"],
                   "seconds": round(time.perf_counter() - start, 2), "coacd_version": summary["coacd_version"],
-                  "remeshed": summary["remeshed"], "rounds": summary["rounds"]}
+                  "remeshed": summary["remeshed"], "rounds": summary["rounds"], "searched_faces": searched_faces}
         (scratch / RECORD).write_text(json.dumps(record, indent=1) + "\n")
         _move_into_place(scratch, out_dir, summary["files"])
     finally:
@@ -158,24 +167,37 @@ def _cached(out_dir: Path, source_sha256: str, settings: dict) -> tuple[Path, ..
     return files if all(path.is_file() for path in files) else None
 
 
-def _decompose(mesh_path: Path, scratch: Path, settings: dict, deadline: float) -> dict:
-    """Run the worker on ``mesh_path``, into ``scratch``; remeshed once more if its search stalls. The
-    worker's summary plus ``remeshed``."""
-    coacd_args = {key: value for key, value in settings.items() if key != "max_rounds"}
-    status, summary = _run_worker(mesh_path, scratch, coacd_args, settings["max_rounds"], deadline)
+def _search_mesh(mesh, mesh_path: Path, scratch: Path, tolerance: float) -> tuple[Path, int]:
+    """The mesh CoACD searches: ``mesh`` simplified within ``tolerance`` m, written into ``scratch``, or the
+    file as it is when it is open or no halving of its faces keeps within the tolerance; and its faces."""
+    fewer = simplified(mesh, tolerance) if tolerance > 0 else None
+    if fewer is None:
+        return mesh_path, len(mesh.faces)
+    path = scratch / "search.stl"
+    path.write_bytes(fewer.export(file_type="stl"))
+    return path, len(fewer.faces)
+
+
+def _decompose(mesh_path: Path, search_path: Path, scratch: Path, settings: dict, deadline: float) -> dict:
+    """Run the worker on ``search_path`` (``mesh_path``'s mesh, or its simplified copy), into ``scratch``;
+    remeshed once more if its search stalls. The worker's summary plus ``remeshed``."""
+    coacd_args = {key: value for key, value in settings.items() if key not in ("max_rounds", "simplify_tolerance")}
+    status, summary = _run_worker(mesh_path, search_path, scratch, coacd_args, settings["max_rounds"], deadline)
     if status == STALLED and coacd_args["preprocess_mode"] == "off":
         coacd_args["preprocess_mode"] = "on"  # closes the narrow gaps the search slices forever
-        status, summary = _run_worker(mesh_path, scratch, coacd_args, settings["max_rounds"], deadline)
+        status, summary = _run_worker(mesh_path, search_path, scratch, coacd_args, settings["max_rounds"], deadline)
     if status == STALLED:
         raise CollisionHullError(mesh_path, f"CoACD's search did not settle within {settings['max_rounds']} rounds "
                                  "of cuts, even remeshed", f"{_REPAIR}, or raise CollisionParams.max_rounds")
     return {**summary, "remeshed": coacd_args["preprocess_mode"] == "on"}
 
 
-def _run_worker(mesh_path: Path, scratch: Path, coacd_args: dict, max_rounds: int, deadline: float):
-    """Run ``python -m sim.parts.coacd_worker`` into ``scratch``: (0, its summary) or (STALLED, None).
-    Raises CollisionHullError if it failed, subprocess.TimeoutExpired at the deadline (it is killed)."""
-    command = [sys.executable, "-m", "sim.parts.coacd_worker", str(mesh_path), str(scratch), json.dumps(coacd_args),
+def _run_worker(mesh_path: Path, search_path: Path, scratch: Path, coacd_args: dict, max_rounds: int,
+                deadline: float):
+    """Run ``python -m sim.parts.coacd_worker`` on ``search_path`` into ``scratch``: (0, its summary) or (STALLED,
+    None). Raises CollisionHullError (naming ``mesh_path``, the user's file) if it failed,
+    subprocess.TimeoutExpired at the deadline (it is killed)."""
+    command = [sys.executable, "-m", "sim.parts.coacd_worker", str(search_path), str(scratch), json.dumps(coacd_args),
                str(max_rounds)]
     # The child must import this very sim, installed or not.
     root = str(Path(sim.__file__).resolve().parent.parent)

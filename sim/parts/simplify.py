@@ -1,0 +1,57 @@
+"""A closed mesh with fewer faces for CoACD's search, no further from the part than a share of the hulls' own slack.
+
+CoACD's time grows with the faces each cut clips and samples, and a CAD export spends thousands of faces on
+fillets and chamfers far finer than the 5 mm its hulls may stand off the surface (decision record 0055). So
+the search runs on the part decimated (Open3D's quadric decimation) as far as it stays closed and within
+``tolerance`` of the part both ways; the hulls are then still clamped to the part's own box. Decision record
+0063 has the measurements.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import open3d as o3d
+import trimesh
+
+_SAMPLES = 20000  # surface samples each way for the deviation; seeded, so a mesh always gets the same answer
+_MIN_FACES = 200  # no coarser: a box needs 12, and below a few hundred a search costs nothing anyway
+
+
+def simplified(mesh: trimesh.Trimesh, tolerance: float) -> trimesh.Trimesh | None:
+    """``mesh`` (closed, metres) with its faces halved as often as the result stays closed and every sample
+    of either surface lies within ``tolerance`` metres of the other; None when no halving does."""
+    if not mesh.is_watertight or len(mesh.faces) < 2 * _MIN_FACES:
+        return None
+    source = o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(mesh.vertices),
+                                       o3d.utility.Vector3iVector(mesh.faces))
+    samples = _samples(mesh)
+    surface = _distance_scene(mesh)
+    best, target = None, len(mesh.faces) // 2
+    while target >= _MIN_FACES:
+        decimated = source.simplify_quadric_decimation(target)
+        candidate = trimesh.Trimesh(np.asarray(decimated.vertices), np.asarray(decimated.triangles), process=False)
+        candidate.merge_vertices(digits_vertex=12)
+        if not candidate.is_watertight or _deviation(candidate, samples, surface) > tolerance:
+            break
+        best, target = candidate, target // 2
+    return best
+
+
+def _samples(mesh: trimesh.Trimesh) -> np.ndarray:
+    points, _ = trimesh.sample.sample_surface(mesh, _SAMPLES, seed=0)
+    return np.asarray(points, dtype=np.float32)
+
+
+def _distance_scene(mesh: trimesh.Trimesh) -> o3d.t.geometry.RaycastingScene:
+    scene = o3d.t.geometry.RaycastingScene()
+    scene.add_triangles(o3d.core.Tensor(np.asarray(mesh.vertices, dtype=np.float32)),
+                        o3d.core.Tensor(np.asarray(mesh.faces, dtype=np.uint32)))
+    return scene
+
+
+def _deviation(candidate: trimesh.Trimesh, part_samples: np.ndarray,
+               part_surface: o3d.t.geometry.RaycastingScene) -> float:
+    """The largest distance (m) from a sample of either surface to the other."""
+    to_candidate = _distance_scene(candidate).compute_distance(o3d.core.Tensor(part_samples)).numpy()
+    to_part = part_surface.compute_distance(o3d.core.Tensor(_samples(candidate))).numpy()
+    return float(max(to_candidate.max(), to_part.max()))
