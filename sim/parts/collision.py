@@ -140,7 +140,14 @@ def collision_hulls(mesh_path: Path, out_dir: Path, params: CollisionParams = Co
         start = time.perf_counter()
         search_path, searched_faces = _search_mesh(mesh, mesh_path, scratch, settings["simplify_tolerance"])
         try:
-            summary = _decompose(mesh_path, search_path, scratch, settings, start + params.timeout_s)
+            try:
+                summary = _decompose(mesh_path, search_path, scratch, settings, start + params.timeout_s)
+            except CollisionHullError:
+                if search_path == mesh_path:
+                    raise
+                # CoACD failing on the simplified copy, the part is searched as it is.
+                search_path, searched_faces = mesh_path, len(mesh.faces)
+                summary = _decompose(mesh_path, mesh_path, scratch, settings, start + params.timeout_s)
         except subprocess.TimeoutExpired:
             raise CollisionHullError(mesh_path, f"CoACD's convex decomposition took longer than {params.timeout_s:g} s "
                                      "and was stopped", f"{_REPAIR}, or raise CollisionParams.timeout_s") from None

@@ -182,3 +182,24 @@ def test_bad_settings_are_refused_naming_the_field():
         CollisionParams(max_convex_hull=0)
     with pytest.raises(SimInputError, match="timeout_s"):
         CollisionParams(timeout_s=0)
+
+
+@needs_coacd
+def test_a_simplified_copy_coacd_fails_on_is_given_up_for_the_mesh_as_it_is(u_stl, tmp_path, monkeypatch):
+    import sim.parts.collision as collision
+
+    real_worker = collision._run_worker
+    searched = []
+
+    def failing_on_the_copy(mesh_path, search_path, *args):
+        searched.append(search_path.name)
+        if search_path.name == "search.stl":
+            raise CollisionHullError(mesh_path, "CoACD's convex decomposition failed: status -11", "repair it")
+        return real_worker(mesh_path, search_path, *args)
+
+    monkeypatch.setattr(collision, "simplified", lambda mesh, tolerance: mesh.copy())
+    monkeypatch.setattr(collision, "_run_worker", failing_on_the_copy)
+    hulls = collision_hulls(u_stl, tmp_path / "u")
+    assert searched == ["search.stl", "u.stl"]
+    record = json.loads((tmp_path / "u" / "collision.json").read_text())
+    assert record["searched_faces"] == len(trimesh.load(u_stl).faces) and len(hulls) >= 2

@@ -1,6 +1,7 @@
 """sim.parts.simplify: the mesh CoACD searches, fewer faces within a tolerance of the part."""
 
 import numpy as np
+import pytest
 import trimesh
 
 from sim.parts.simplify import simplified
@@ -44,3 +45,16 @@ def test_coarse_or_open_meshes_are_searched_as_they_are():
     open_cylinder.update_faces(np.arange(len(open_cylinder.faces)) != 0)
     assert not open_cylinder.is_watertight
     assert simplified(open_cylinder, 0.001) is None
+
+
+def test_triangles_folded_against_the_part_are_measured_by_their_share_of_the_surface():
+    from sim.parts.simplify import _distance_scene, _folded_share
+
+    part = _fine_cylinder()
+    folded = part.copy()
+    flip = np.zeros(len(part.faces), bool)
+    flip[::10] = True
+    folded.faces[flip] = folded.faces[flip][:, ::-1]
+    share = _folded_share(folded, part, _distance_scene(part))
+    assert share == pytest.approx(folded.area_faces[flip].sum() / folded.area, abs=0.02)
+    assert _folded_share(part, part, _distance_scene(part)) < 0.005
