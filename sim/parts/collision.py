@@ -176,7 +176,7 @@ def _cached(out_dir: Path, source_sha256: str, settings: dict) -> tuple[Path, ..
 
 def _search_mesh(mesh, mesh_path: Path, scratch: Path, tolerance: float) -> tuple[Path, int]:
     """The mesh CoACD searches: ``mesh`` simplified within ``tolerance`` m, written into ``scratch``, or the
-    file as it is when it is open or no halving of its faces keeps within the tolerance; and its faces."""
+    file as it is when it is open or no decimation keeps within the tolerance; and its faces."""
     fewer = simplified(mesh, tolerance) if tolerance > 0 else None
     if fewer is None:
         return mesh_path, len(mesh.faces)
