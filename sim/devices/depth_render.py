@@ -38,6 +38,11 @@ class DepthBodyRenderer:
         self._camera.type, self._camera.fixedcamid = mujoco.mjtCamera.mjCAMERA_FIXED, camera_id
         self._rect = mujoco.MjrRect(0, 0, width, height)
 
+    @property
+    def drawn_groups(self) -> np.ndarray:
+        """(6,) uint8: which geom groups the render draws (MuJoCo's default: 0, 1 and 2)."""
+        return np.array(self._option.geomgroup)
+
     def render(self, data: mujoco.MjData) -> tuple[np.ndarray, np.ndarray]:
         """Depth (m) and body ids of ``data``'s state (kinematics must be current)."""
         model = self.model

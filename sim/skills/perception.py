@@ -29,6 +29,7 @@ from sim.control.ik import T_world_site
 from sim.devices.depth_render import DepthBodyRenderer
 from sim.devices.sensor import DepthCamera, SensorFrame, T_world_camera_opencv
 from sim.errors import SimInputError
+from sim.skills.monitor_gate import MonitorGate, noise_margin
 from sim.skills.perception_params import PerceptionParams
 from sim.world import World
 from sim.world.parts import standing_height
@@ -118,6 +119,10 @@ class Perception:
         heights = [standing_height(world.config, world.catalog[p]) for p in world.workpieces]
         self.ceiling = world.table_top + max(heights) + CEILING_MARGIN
         self._monitor_rays = MONITOR_CAMERA.pixel_rays().reshape(-1, 3)
+        half_extent = tuple(v / 2 for v in world.config.table_size)
+        margin = noise_margin(self._noise.depth_sigma, world.T_world_camera, half_extent, world.table_top)
+        self._gate = MonitorGate(model, self._monitor.drawn_groups, self._arm_bodies, half_extent, self.ceiling,
+                                 margin)
 
     @property
     def library(self):
@@ -209,7 +214,12 @@ class Perception:
         depth, as the full-resolution model gives it). The model's pixel-scale effects (lateral
         jitter, edge dropouts, the shadow band) are below a pixel at this resolution and are left out:
         the full model costs more than the render, and the monitor runs four times a second.
+
+        While nothing but the robot and its held part reaches near the ceiling, it is 0 without a render
+        (:mod:`sim.skills.monitor_gate`).
         """
+        if not self._gate.may_intrude(data, *self._held_ball(data, holding)):
+            return 0
         depth, body = self._monitor.render(data)
         depth = np.where(np.isin(body, self._arm_bodies), 0.0, depth).ravel()
         keep = depth > 0
@@ -222,10 +232,18 @@ class Perception:
     def _count_intruding(self, world_pts: np.ndarray, data: mujoco.MjData, holding: str | None) -> int:
         inside = self._in_workspace(world_pts) & (world_pts[:, 2] > self.ceiling)
         if holding is not None and np.any(inside):
-            tool = T_world_site(self.world.model, data, self.world.arm.tool_site)[:3, 3]
-            radius = float(np.linalg.norm(np.ptp(self.world.catalog[holding].bounds(), axis=0))) + 0.02
+            _, tool, radius = self._held_ball(data, holding)
             inside &= np.linalg.norm(world_pts - tool, axis=1) > radius
         return int(np.count_nonzero(inside))
+
+    def _held_ball(self, data: mujoco.MjData, holding: str | None) -> tuple[int | None, np.ndarray | None, float]:
+        """The held part's body id, the tool's position (3,) and the radius (m) around it that the held part
+        explains (its box's diagonal, plus 2 cm); (None, None, 0) when the hand is empty."""
+        if holding is None:
+            return None, None, 0.0
+        tool = T_world_site(self.world.model, data, self.world.arm.tool_site)[:3, 3]
+        radius = float(np.linalg.norm(np.ptp(self.world.catalog[holding].bounds(), axis=0))) + 0.02
+        return self.world.model.body(holding).id, tool, radius
 
     def close(self) -> None:
         self.camera.close()
