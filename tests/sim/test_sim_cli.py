@@ -1,5 +1,6 @@
 """psorr-sim perceive: the cell's rendered cloud through the recognizer, graded against the simulator."""
 
+import importlib
 import json
 import subprocess
 import sys
@@ -35,7 +36,17 @@ def test_run_prints_the_summary_contract(tmp_path):
     assert record["grasp_success_rate"] == 1.0 and record["place_success_rate"] == 1.0
 
 
-def test_bad_task_files_name_the_file_and_the_fix(tmp_path):
+def _in_process(capsys, module: str, *args: str) -> tuple[int, str]:
+    """The exit status and stderr of ``python -m module args``, run in this process: a usage error needs none
+    of its own (an unexpected exception fails the test as a traceback would)."""
+    try:
+        status = importlib.import_module(module).main(list(args))
+    except SystemExit as exc:
+        status = exc.code
+    return status, capsys.readouterr().err
+
+
+def test_bad_task_files_name_the_file_and_the_fix(tmp_path, capsys):
     cases = {"bad.yaml": b"workpieces: [gearbox]\n", "keys.yaml": b"workpieces: [chassis]\nspeed: 3\n",
              "broken.yaml": b"workpieces: [chassis\n", "word.yaml": b"workpieces: [chassis]\ncamera_height: high\n",
              "bool.yaml": b"workpieces: [chassis]\ncamera_height: true\n",
@@ -46,32 +57,30 @@ def test_bad_task_files_name_the_file_and_the_fix(tmp_path):
              "key_twice.yaml": b"workpieces: [chassis]\noccluder: true\noccluder: false\n"}
     for name, text in cases.items():
         (tmp_path / name).write_bytes(text)
-        out = subprocess.run([sys.executable, "-m", "sim.cli", "run", str(tmp_path / name)],
-                             capture_output=True, text=True, timeout=120)
-        assert out.returncode == 2 and name in out.stderr and "Traceback" not in out.stderr, out.stderr
+        status, err = _in_process(capsys, "sim.cli", "run", str(tmp_path / name))
+        assert status == 2 and name in err, err
     # PyYAML keeps the last of a key given twice without a word; and a folder is not a missing file.
-    assert "the key 'occluder' is given twice, line 3" in out.stderr
-    folder = subprocess.run([sys.executable, "-m", "sim.cli", "run", str(tmp_path)], capture_output=True, text=True,
-                            timeout=120)
-    assert folder.returncode == 2 and "is a folder, not a task file" in folder.stderr
+    assert "the key 'occluder' is given twice, line 3" in err
+    status, err = _in_process(capsys, "sim.cli", "run", str(tmp_path))
+    assert status == 2 and "is a folder, not a task file" in err
+    # The command itself, once: the same line and status, and no traceback.
+    out = subprocess.run([sys.executable, "-m", "sim.cli", "run", str(tmp_path / "bad.yaml")],
+                         capture_output=True, text=True, timeout=120)
+    assert out.returncode == 2 and "bad.yaml" in out.stderr and "Traceback" not in out.stderr, out.stderr
 
 
-def test_run_wants_at_least_one_episode():
+def test_run_wants_at_least_one_episode(capsys):
     for count in ("0", "-2", "two", "99999999999999999999"):
-        out = subprocess.run([sys.executable, "-m", "sim.cli", "run", "tasks/demo.yaml", "--episodes", count],
-                             capture_output=True, text=True, timeout=120)
-        assert out.returncode == 2 and "--episodes" in out.stderr and "from 1 to" in out.stderr, out.stderr
-        assert "Traceback" not in out.stderr
+        status, err = _in_process(capsys, "sim.cli", "run", "tasks/demo.yaml", "--episodes", count)
+        assert status == 2 and "--episodes" in err and "from 1 to" in err, err
 
 
-def test_a_negative_seed_is_a_usage_error_in_every_command():
+def test_a_negative_seed_is_a_usage_error_in_every_command(capsys):
     commands = [["sim.cli", "run", "tasks/demo.yaml"], ["sim.cli", "perceive"],
                 ["psorr.cli", "decompose", "scene.pcd"], ["psorr.cli", "recognize", "models", "scene.pcd"]]
-    for command in commands:
-        out = subprocess.run([sys.executable, "-m", *command, "--seed", "-1"], capture_output=True, text=True,
-                             timeout=120)
-        assert out.returncode == 2 and "--seed" in out.stderr and "at least 0" in out.stderr, out.stderr
-        assert "Traceback" not in out.stderr
+    for module, *command in commands:
+        status, err = _in_process(capsys, module, *command, "--seed", "-1")
+        assert status == 2 and "--seed" in err and "at least 0" in err, err
 
 
 def test_grasps_draws_a_picture_per_part(tmp_path):
