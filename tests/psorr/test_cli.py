@@ -1,12 +1,14 @@
-"""The psorr command line, run as a user would."""
+"""The psorr command line, run as a user would (its refusals, which need no interpreter of their own, in this one)."""
 
 import json
 import subprocess
 import sys
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
+from psorr.cli import main
 from psorr.io.clouds import write_cloud
 from psorr.synthetic import primitive_scenes as synthetic
 from psorr.types import PointCloud
@@ -14,6 +16,17 @@ from psorr.types import PointCloud
 
 def _run(*args):
     return subprocess.run([sys.executable, "-m", "psorr.cli", *args], capture_output=True, text=True, timeout=120)
+
+
+def _here(capsys, *args) -> SimpleNamespace:
+    """``psorr`` run in this process, as :func:`_run` reports it: refusals need no interpreter of their own (an
+    unexpected exception fails the test as a traceback would)."""
+    try:
+        status = main(list(args))
+    except SystemExit as exc:
+        status = exc.code
+    out = capsys.readouterr()
+    return SimpleNamespace(returncode=status, stdout=out.out, stderr=out.err)
 
 
 def _labels_and_picture_written(folder, cloud, n_items: int) -> None:
@@ -41,52 +54,52 @@ def test_decompose_writes_labels_json_and_picture(tmp_path):
     _labels_and_picture_written(tmp_path, scene.cloud, len(record["primitives"]))
 
 
-def test_bad_file_gives_one_line_error_not_a_traceback(tmp_path):
+def test_bad_file_gives_one_line_error_not_a_traceback(tmp_path, capsys):
     bad = tmp_path / "broken.pcd"
     bad.write_text("this is not a PCD file\n")
     out = _run("decompose", str(bad))
     assert out.returncode == 2
     assert "broken.pcd" in out.stderr and "Traceback" not in out.stderr
-    missing = _run("decompose", str(tmp_path / "nowhere.ply"))
+    missing = _here(capsys, "decompose", str(tmp_path / "nowhere.ply"))
     assert missing.returncode == 2 and "nowhere.ply" in missing.stderr
 
 
-def test_a_cloud_too_small_to_decompose_is_named_with_the_fix(tmp_path):
+def test_a_cloud_too_small_to_decompose_is_named_with_the_fix(tmp_path, capsys):
     few = tmp_path / "few.xyz"
     few.write_text("0 0 1\n0.01 0 1\n0 0.01 1\n")
-    out = _run("decompose", str(few))
+    out = _here(capsys, "decompose", str(few))
     assert out.returncode == 2 and "Traceback" not in out.stderr
     assert "few.xyz" in out.stderr and "3 finite points" in out.stderr
     rng = np.random.default_rng(0)  # many points in five clumps: five voxels
     path = tmp_path / "clumps.npy"
     np.save(path, np.repeat(rng.uniform(-0.1, 0.1, (5, 3)) + [0, 0, 1], 100, axis=0) + rng.normal(0, 1e-4, (500, 3)))
-    coarse = _run("decompose", str(path))
+    coarse = _here(capsys, "decompose", str(path))
     assert coarse.returncode == 2 and "clumps.npy" in coarse.stderr and "smaller --voxel-size" in coarse.stderr
 
 
-def test_voxel_size_zero_is_refused_not_taken_for_the_default(tmp_path):
+def test_voxel_size_zero_is_refused_not_taken_for_the_default(tmp_path, capsys):
     scene = synthetic.box_on_table(np.random.default_rng(0))
     path = tmp_path / "scene.npy"
     np.save(path, scene.cloud.points)
     for size in ("0", "-1", "nan", "inf", "5"):  # 5: millimetres, 1000x too big
-        out = _run("decompose", str(path), "--voxel-size", size)
+        out = _here(capsys, "decompose", str(path), "--voxel-size", size)
         assert out.returncode == 2 and f"--voxel-size: expected a voxel size in metres from 0.001 to 0.1, got " \
             f"'{size}'" in out.stderr
 
 
-def test_help_states_the_decomposition_default_voxel_size():
+def test_help_states_the_decomposition_default_voxel_size(capsys):
     from psorr.cli import DEFAULT_VOXEL_SIZE
     from psorr.decomposition import DecomposeParams
 
     assert DEFAULT_VOXEL_SIZE == DecomposeParams().voxel_size
-    assert f"(default {DEFAULT_VOXEL_SIZE})" in _run("decompose", "--help").stdout
+    assert f"(default {DEFAULT_VOXEL_SIZE})" in _here(capsys, "decompose", "--help").stdout
 
 
-def test_recognize_reads_the_scene_before_it_trains_models(tmp_path):
+def test_recognize_reads_the_scene_before_it_trains_models(tmp_path, capsys):
     # Training new meshes can take a while; a mistyped scene path should be reported at once.
     mesh = tmp_path / "not_a_mesh.stl"
     mesh.write_text("never read")
-    out = _run("recognize", str(mesh), str(tmp_path / "missing.pcd"), "--json")
+    out = _here(capsys, "recognize", str(mesh), str(tmp_path / "missing.pcd"), "--json")
     assert out.returncode == 2 and out.stdout == ""
     assert "missing.pcd" in out.stderr and "training" not in out.stderr and "not_a_mesh" not in out.stderr
 
@@ -109,12 +122,12 @@ def test_an_unwritable_cache_is_one_warning_line_and_recognition_runs(tmp_path):
     assert set(json.loads(out.stdout)) == {"detections", "stats"}
 
 
-def test_a_cloud_in_millimetres_is_refused_with_the_fix(tmp_path):
+def test_a_cloud_in_millimetres_is_refused_with_the_fix(tmp_path, capsys):
     scene = synthetic.box_on_table(np.random.default_rng(0))
     path = tmp_path / "scene_mm.ply"
     write_cloud(path, PointCloud(scene.cloud.points * 1000.0))
     for args in (("decompose", str(path)), ("recognize", str(tmp_path / "no_meshes_needed.stl"), str(path))):
-        out = _run(*args)
+        out = _here(capsys, *args)
         assert out.returncode == 2 and "Traceback" not in out.stderr
         assert "scene_mm.ply" in out.stderr and "millimetres: scale it by 0.001" in out.stderr
         assert "training" not in out.stderr  # refused before any model is trained
@@ -141,7 +154,7 @@ def test_stacked_reports_a_block_flush_with_a_larger_one_that_the_default_takes_
     assert found[()] == [] and [d["model"] for d in found[("--stacked",)]] == ["small"]
 
 
-def test_outputs_that_cannot_be_written_are_refused_before_any_work(tmp_path):
+def test_outputs_that_cannot_be_written_are_refused_before_any_work(tmp_path, capsys):
     scene = synthetic.box_on_table(np.random.default_rng(0))
     path = tmp_path / "scene.npy"
     np.save(path, scene.cloud.points)
@@ -150,19 +163,19 @@ def test_outputs_that_cannot_be_written_are_refused_before_any_work(tmp_path):
              (("decompose", str(path), "--png", "/proc/no/x.png"), "cannot write there"),
              (("recognize", str(tmp_path / "never_read.stl"), str(path), "--png", "/proc/x.png"), "cannot write there")]
     for args, why in cases:
-        out = _run(*args)
+        out = _here(capsys, *args)
         assert out.returncode == 2 and why in out.stderr and "Traceback" not in out.stderr, out.stderr
         assert "read " not in out.stderr and "training" not in out.stderr  # refused before reading or training
     assert not (tmp_path / "labels.bin.npy").exists()
 
 
-def test_recognize_refuses_a_cloud_no_sensor_at_the_origin_could_see(tmp_path):
+def test_recognize_refuses_a_cloud_no_sensor_at_the_origin_could_see(tmp_path, capsys):
     points = synthetic.box_on_table(np.random.default_rng(0)).cloud.points
     world = points - [0.0, 0.0, np.nanmedian(points[:, 2])]  # a table about z = 0, as in a world frame
     flipped = points * [1.0, -1.0, -1.0]  # z towards the sensor
     for name, cloud in (("world.npy", world), ("flipped.npy", flipped)):
         np.save(tmp_path / name, cloud)
-        out = _run("recognize", str(tmp_path / "never_read.stl"), str(tmp_path / name), "--json")
+        out = _here(capsys, "recognize", str(tmp_path / "never_read.stl"), str(tmp_path / name), "--json")
         assert out.returncode == 2 and out.stdout == "" and "Traceback" not in out.stderr
         assert name in out.stderr and "behind the sensor" in out.stderr and "sensor's frame" in out.stderr
 
