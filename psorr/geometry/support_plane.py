@@ -11,6 +11,7 @@ from psorr.geometry.open3d_threads import single_threaded
 
 _DISTANCE = 0.008  # m: a plane's inlier band, three Kinect depth sigmas at 1.2 m
 _MIN_SHARE = 0.2   # of the points: a smaller largest plane is no table
+_REFITS = 5        # least-squares refits of RANSAC's plane: two or three settle its inliers
 
 
 @dataclass(frozen=True, eq=False)
@@ -32,5 +33,24 @@ def support_plane(cloud: o3d.geometry.PointCloud) -> SupportPlane | None:
         plane, inliers = cloud.segment_plane(distance_threshold=_DISTANCE, ransac_n=3, num_iterations=200)
     if len(inliers) <= _MIN_SHARE * len(cloud.points):
         return None
-    plane = np.asarray(plane, float) / np.linalg.norm(plane[:3])
-    return SupportPlane(plane if plane[3] > 0 else -plane, np.asarray(inliers, dtype=np.int64))
+    plane, inliers = _refined(np.asarray(cloud.points), np.asarray(plane, float), np.asarray(inliers, dtype=np.int64))
+    return SupportPlane(plane if plane[3] > 0 else -plane, inliers)
+
+
+def _refined(points: np.ndarray, plane: np.ndarray, inliers: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The least-squares plane of the points within _DISTANCE of ``plane``, refitted until its inliers stay
+    the same (at most _REFITS times), and those inliers. RANSAC's plane is the best of its draws, which
+    depend on the points' order; the least-squares plane of a hundred thousand inliers does not."""
+    plane = plane / np.linalg.norm(plane[:3])
+    for _ in range(_REFITS):
+        fitted = points[inliers]
+        centre = fitted.mean(axis=0)
+        spread = fitted - centre
+        normal = np.linalg.eigh(spread.T @ spread)[1][:, 0]
+        normal = normal if normal @ plane[:3] > 0 else -normal
+        plane = np.append(normal, -normal @ centre)
+        again = np.flatnonzero(np.abs(points @ normal + plane[3]) <= _DISTANCE)
+        if np.array_equal(again, inliers):
+            break
+        inliers = again
+    return plane, inliers
