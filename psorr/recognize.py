@@ -204,7 +204,8 @@ class Recognizer:
         self._search(cloud, view, scene, tally)
         if self.outline is not None:  # parts too small to pair, and pairs' wrong poses, by how parts rest
             outlined = cropped if followed else cloud
-            self._single_search(view, tally, self._new_poses(self.outline.candidates(outlined, view), tally))
+            self._single_search(view, tally, self._new_poses(self.outline.candidates(outlined, view), tally),
+                                fine_starts=True)
         if p.detail.fine_voxel is not None:
             self._second_look(cloud, cropped, view, margin, tally, rng)
         return tally.result()
@@ -290,9 +291,9 @@ class Recognizer:
         tally.qpbo_unlabelled += found.unlabelled
         return self.acceptance(view, found.found.candidates, tally.claims)
 
-    def _single_search(self, view, tally: SearchTally, found, beyond=None) -> None:
+    def _single_search(self, view, tally: SearchTally, found, beyond=None, fine_starts: bool = False) -> None:
         """The candidates ``found`` from single primitives go through acceptance (poses from one cylinder
         must be seen ``beyond`` it); what they find, and cost, is added to ``tally``."""
-        self.acceptance(view, found.candidates, tally.claims, beyond)
+        self.acceptance(view, found.candidates, tally.claims, beyond, fine_starts)
         tally.add(found.hypotheses, found.verify_ms)
 

@@ -25,7 +25,7 @@ from psorr.hypotheses.pose_clusters import same_pose
 from psorr.hypotheses.single_cylinder import SingleCylinderMatcher
 from psorr.library.models import Model, ModelLibrary
 from psorr.types import Detection
-from psorr.verification.point_check import CheckParams, PoseCheck, check_pose
+from psorr.verification.point_check import CheckParams, PoseCheck, check_pose, check_poses
 from psorr.verification.scene_view import SceneView
 from psorr.viz.observer import observer
 
@@ -68,15 +68,36 @@ class Acceptance:
         return RenderJudge(view, {name: r.renderer for name, r in self.resolvers.items()}, self._spheres)
 
     def __call__(self, view: SceneView, candidates, claims: PixelClaims,
-                 beyond: SingleCylinderMatcher | None = None) -> list[Detection]:
+                 beyond: SingleCylinderMatcher | None = None, fine_starts: bool = False) -> list[Detection]:
         """The new detections among ``candidates`` (:class:`Candidate`), added to ``claims``. A candidate that
         shares more than max_shared_pixels of its pixels with earlier detections is dropped, unless it scores
         higher, when it displaces them. Poses from one cylinder (``beyond``) must also be supported off the
-        model's long cylinders."""
+        model's long cylinders. ``fine_starts``: the candidates are placed as finely as the point check's
+        tolerance (the resting-pose search's), so those it already finds seen through are given up unfitted."""
         observer().candidates(tuple(candidates), self.library)
+        if fine_starts:
+            candidates = self._not_seen_through(view, candidates)
         fitted = [f for c in candidates if (f := self.fit(view, c, beyond)) is not None]
         fitted.sort(key=lambda f: -f.check.score)
         return self._settle(view, fitted, claims)
+
+    def _not_seen_through(self, view: SceneView, candidates) -> list[Candidate]:
+        """The ``candidates`` whose poses, as placed, the coarse fit's point check does not see through beyond
+        its bar. For poses placed within the check's tolerance, the check at the start says what it would
+        say after the coarse ICP, in one batched check instead of an ICP each
+        (docs/decisions/0049-outline-hypotheses.md)."""
+        candidates = list(candidates)
+        models = [self.library.models[c.model] for c in candidates]
+        checks = check_poses(view, [m.points for m in models], [m.normals for m in models],
+                             np.array([c.T_cloud_model for c in candidates]).reshape(-1, 4, 4), _COARSE)
+        kept = []
+        for c, m, check in zip(candidates, models, checks):
+            if check.violation_ratio > self.coarse_max_violation:
+                observer().rejected(m.name, c.T_cloud_model,
+                                    f"as placed: {check.violation_ratio:.0%} of it seen through")
+            else:
+                kept.append(c)
+        return kept
 
     def refine(self, view: SceneView, model: Model, T_cloud_model: np.ndarray) -> Detection:
         """A known pose judged as candidates are: coarse ICP, the fine fit, and its near-symmetric twins told apart."""
