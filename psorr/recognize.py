@@ -30,13 +30,13 @@ from psorr.checks import params as check
 from psorr.checks.arrays import random_generator
 from psorr.checks.clouds import require_seen_from_origin, require_sensor_pose
 from psorr.decomposition.detail import decompose_with_leftovers
-from psorr.decomposition.support_crop import crop_to_parts
+from psorr.decomposition.support_crop import band_rim, crop_to_parts, table_in_band
 from psorr.errors import InvalidInputError
 from psorr.hypotheses.candidates import CandidateSet
 from psorr.hypotheses.orr import orr_hypotheses
 from psorr.hypotheses.outline import OutlineMatcher
 from psorr.hypotheses.pairs import PairCandidates
-from psorr.hypotheses.pose_clusters import same_pose
+from psorr.hypotheses.pose_clusters import apart_from
 from psorr.hypotheses.psg import PsgMatcher
 from psorr.hypotheses.single_cylinder import SingleCylinderMatcher
 from psorr.hypotheses.single_plane import SinglePlaneMatcher
@@ -204,10 +204,10 @@ class Recognizer:
         self._search(cloud, view, scene, tally)
         if self.outline is not None:  # parts too small to pair, and pairs' wrong poses, by how parts rest
             outlined = cropped if followed else cloud
-            self._single_search(view, tally, self._new_poses(self.outline.candidates(outlined, view), tally),
-                                fine_starts=True)
+            rests = apart_from(self.outline.candidates(outlined, view), tally.detections, self.library)
+            self._single_search(view, tally, rests, fine_starts=True)
         if p.detail.fine_voxel is not None:
-            self._second_look(cloud, cropped, view, margin, tally, rng)
+            self._second_look(cloud, cropped, view, tally, rng)
         return tally.result()
 
     def _unexplained(self, cropped: PointCloud, view: SceneView, tally: SearchTally,
@@ -221,8 +221,10 @@ class Recognizer:
                                          _TABLE_EXTENT * self.max_diameter, p.detail.min_unexplained)
         return None if left is None else crop_to_parts(left, view.support_plane, margin, p.support_crop)
 
-    def _second_look(self, cloud, cropped, view, margin, tally: SearchTally, rng) -> None:
-        """What stands on the table and no detection explains, decomposed finer and searched again."""
+    def _second_look(self, cloud, cropped, view, tally: SearchTally, rng) -> None:
+        """What stands on the table and no detection explains, decomposed finer and searched again, with a
+        narrow band of the table: the table is then the plane at the band's rim, not the one too large to be
+        a part's face (docs/decisions/0064-the-second-looks-band.md)."""
         p = self.params
         left = self.detected.unexplained(cropped, view.support_plane, tally.detections, p.support_crop.off_plane,
                                          _TABLE_EXTENT * self.max_diameter, p.detail.min_unexplained)
@@ -230,23 +232,25 @@ class Recognizer:
             return
         t0 = time.perf_counter()
         # The standing points that are explained are gone; the table stays, for the crop's band.
-        left = crop_to_parts(left, view.support_plane, margin, p.support_crop)
+        left = crop_to_parts(left, view.support_plane, p.detail.fine_band, p.support_crop)
         fine = decompose_with_leftovers(left, replace(self.scene_decompose, voxel_size=p.detail.fine_voxel), None, rng)
         tally.decomposition_ms += (time.perf_counter() - t0) * 1e3
         current_observer().decomposition("detail", cloud, fine)
         if fine is not None:
-            self._search(cloud, view, fine, tally)
+            rim = band_rim(left, view.support_plane, p.detail.fine_band, p.support_crop)
+            self._search(cloud, view, fine, tally, table_in_band(fine.primitives, fine.labels, rim))
 
-    def _search(self, cloud, view, scene, tally: SearchTally) -> None:
+    def _search(self, cloud, view, scene, tally: SearchTally, table: int | None = None) -> None:
         """Pair rounds (PSORR) or clique matching (PSG), then single faces and long cylinders, over the
-        primitives of the decomposition ``scene``; what they find, and what it cost, is added to ``tally``."""
-        pts, nrm, used = scene_oriented_points(scene.primitives, _TABLE_EXTENT * self.max_diameter)
+        primitives of the decomposition ``scene`` but the table (its index, or None: the planes too large to be
+        a part's face); what they find, and what it cost, is added to ``tally``."""
+        pts, nrm, used = scene_oriented_points(scene.primitives, _TABLE_EXTENT * self.max_diameter, table)
         prims = [scene.primitives[k] for k in used]
         members = [cloud.points[scene.labels == k] for k in used]
         # Primitives no detection explains yet; those an earlier search's detections explain are out.
         open_ = np.array([not self.detected.explain(tally.detections, m) for m in members], dtype=bool)
         if self.method is Method.PSG:  # the shape graph's cliques in place of the pair rounds
-            more = self._cliques(view, scene, tally)
+            more = self._cliques(view, scene, tally, table)
             open_ &= np.array([not self.detected.explain(more, m) for m in members], dtype=bool)
         else:
             open_ = self._pair_rounds(view, pts, nrm, prims, members, open_, tally)
@@ -259,15 +263,6 @@ class Recognizer:
         cylinders = [prims[k] for k in unexplained if prims[k].kind is PrimitiveKind.CYLINDER
                      and not self.detected.explain(tally.detections, members[k])]
         self._single_search(view, tally, self.single_cylinder.candidates(view, cylinders), self.single_cylinder)
-
-    def _new_poses(self, found: CandidateSet, tally: SearchTally) -> CandidateSet:
-        """``found`` less the candidates within a tenth of their model's diameter (the accuracy the benchmarks
-        ask) of a standing detection of it: ICP would take them to that detection, which keeps its pixels."""
-        standing = [(self.library.names.index(d.model), d.T_cloud_model) for d in tally.detections]
-        new = tuple(c for c in found.candidates if not any(
-            m == c.model and same_pose(self.library.models[m].points[::50], c.T_cloud_model, T,
-                                       0.1 * self.library.models[m].diameter) for m, T in standing))
-        return replace(found, candidates=new)
 
     def _pair_rounds(self, view, pts, nrm, prims, members, open_, tally: SearchTally) -> np.ndarray:
         """PSORR's pair rounds over the ``open_`` primitives; those still unexplained after them."""
@@ -283,9 +278,9 @@ class Recognizer:
                 break
         return open_
 
-    def _cliques(self, view, scene, tally: SearchTally) -> list:
+    def _cliques(self, view, scene, tally: SearchTally, table: int | None) -> list:
         """PSG: the scene graph's cliques matched, settled by QPBO and accepted; the new detections."""
-        found = self.psg.candidates(scene.graph, _TABLE_EXTENT * self.max_diameter)
+        found = self.psg.candidates(scene.graph, _TABLE_EXTENT * self.max_diameter, table)
         tally.add(found.found.hypotheses, found.found.verify_ms)
         tally.qpbo_nodes += found.nodes
         tally.qpbo_unlabelled += found.unlabelled

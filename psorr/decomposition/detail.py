@@ -31,15 +31,19 @@ class DetailParams:
 
     ``leftover_voxel``: the points the first decomposition left unlabelled, decomposed again at this voxel.
     ``fine_voxel``: what stands on the table unexplained after the search, decomposed again at this voxel
-    and searched again, if at least ``min_unexplained`` points (a detection needs acceptance's min_support).
+    and searched again, if at least ``min_unexplained`` points (a detection needs acceptance's min_support),
+    with a band of the table ``fine_band`` metres wide around it; the table is the plane that holds the
+    band's outer cells (:func:`psorr.decomposition.support_crop.table_in_band`).
     """
 
     leftover_voxel: float | None = 0.005
     fine_voxel: float | None = 0.005
     min_unexplained: int = 100
+    fine_band: float = 0.04
 
     def __post_init__(self):
         check.positive(self, "leftover_voxel", "fine_voxel", unit=" metres", optional=True)
+        check.positive(self, "fine_band", unit=" metres")
         check.whole(self, "min_unexplained")
 
 

@@ -19,7 +19,7 @@ from scipy.spatial import cKDTree
 
 from psorr.checks import params as check
 from psorr.geometry.boxes import orthonormal_frame
-from psorr.types import PointCloud
+from psorr.types import PointCloud, PrimitiveKind
 
 _MAX_GRID_CELLS = 20_000_000  # 20 MB of bools: a 1 cm grid 44 m square
 
@@ -70,6 +70,31 @@ def crop_to_parts(cloud: PointCloud, plane: np.ndarray | None, margin: float,
     cropped = pts.copy()
     cropped[finite[far]] = np.nan
     return replace(cloud, points=cropped)
+
+
+def band_rim(cloud: PointCloud, plane: np.ndarray, margin: float,
+             params: SupportCropParams = SupportCropParams()) -> np.ndarray:
+    """(N,) bool over the points of ``cloud`` (cropped by :func:`crop_to_parts` with ``margin``): those of the
+    band's outer two cells, the points farthest along the ``plane`` from anything standing on it."""
+    finite = np.flatnonzero(cloud.valid_mask)
+    along, height = along_plane(cloud.points[finite], plane)
+    off = height > params.off_plane
+    rim = np.zeros(len(cloud.points), dtype=bool)
+    if not off.any():
+        return rim
+    cells = np.floor((along - np.array([along[:, 0].min(), along[:, 1].min()])) / params.cell).astype(np.int64)
+    inner = int(np.ceil(margin / params.cell)) - 1  # crop_to_parts keeps up to this plus two
+    rim[finite[~off & ~_near_cells(cells, off, max(inner, 1))]] = True
+    return rim
+
+
+def table_in_band(primitives, labels: np.ndarray, rim: np.ndarray) -> int:
+    """The index of the plane among ``primitives`` (labels (N,) naming each point's) that holds the most points
+    of the band's ``rim`` (:func:`band_rim`): the table, which reaches past the band on every side. -1 when no
+    plane holds any."""
+    held = np.bincount(labels[rim & (labels >= 0)], minlength=len(primitives))
+    planes = [k for k, p in enumerate(primitives) if p.kind is PrimitiveKind.PLANE and held[k] > 0]
+    return max(planes, key=lambda k: held[k]) if planes else -1
 
 
 def _near_cells(cells: np.ndarray, occupied: np.ndarray, reach: int) -> np.ndarray:

@@ -15,6 +15,8 @@ quarter in each component of the rotation's quaternion (about 30 degrees).
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 from scipy.spatial.transform import Rotation
 
@@ -105,3 +107,14 @@ def share_out(order, models, limit):
 def same_pose(points: np.ndarray, A: np.ndarray, B: np.ndarray, tolerance: float) -> bool:
     """Do poses A and B (4, 4) place ``points`` (N, 3) within ``tolerance`` metres of each other, on average?"""
     return float(np.linalg.norm(points @ (A[:3, :3] - B[:3, :3]).T + (A[:3, 3] - B[:3, 3]), axis=1).mean()) < tolerance
+
+
+def apart_from(found, detections, library):
+    """The :class:`~psorr.hypotheses.candidates.CandidateSet` ``found`` less the candidates within a tenth of
+    their model's diameter (the accuracy the benchmarks ask) of one of the ``detections`` of it, models of
+    ``library``: ICP would take them to that detection, which keeps its pixels."""
+    standing = [(library.names.index(d.model), d.T_cloud_model) for d in detections]
+    new = tuple(c for c in found.candidates if not any(
+        m == c.model and same_pose(library.models[m].points[::50], c.T_cloud_model, T, 0.1 * library.models[m].diameter)
+        for m, T in standing))
+    return replace(found, candidates=new)

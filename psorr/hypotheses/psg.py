@@ -87,10 +87,11 @@ class PsgMatcher:
         self.model_areas = np.array([a.weight.sum() for a in self.model_primitives])
         self.model_centres = np.array([m.points.mean(axis=0) for m in self.models]).reshape(-1, 3)
 
-    def candidates(self, graph: PrimitiveShapeGraph, max_extent: float) -> PsgCandidates:
+    def candidates(self, graph: PrimitiveShapeGraph, max_extent: float, table: int | None = None) -> PsgCandidates:
         """Candidates from the cliques of the scene's shape ``graph`` among primitives no longer than
-        ``max_extent`` metres (the table is no part's face)."""
-        found = self._hypotheses(graph, max_extent)
+        ``max_extent`` metres, with the table (the vertex ``table``, or when None the largest plane longer than
+        that), which is no part's face but the plane a part rests on."""
+        found = self._hypotheses(graph, max_extent, table)
         start = time.perf_counter()
         prims = graph.primitives
         # As PSORR's pair votes: the poses most scene cliques agree on, an equal share per model.
@@ -113,10 +114,10 @@ class PsgMatcher:
         chosen = CandidateSet.chosen(found.models, found.poses, order, len(found.poses), verify_ms, scores)
         return PsgCandidates(chosen, n_nodes, n_unlabelled)
 
-    def _hypotheses(self, graph: PrimitiveShapeGraph, max_extent: float) -> _Hypotheses:
-        graph, table = _table_turned_over(graph, max_extent)
+    def _hypotheses(self, graph: PrimitiveShapeGraph, max_extent: float, table: int | None) -> _Hypotheses:
+        graph, table = _table_turned_over(graph, max_extent, table)
         prims = graph.primitives
-        small = {k for k, p in enumerate(prims) if float(np.max(p.box.extent)) <= max_extent}
+        small = {k for k, p in enumerate(prims) if float(np.max(p.box.extent)) <= max_extent and k != table}
         scene_cliques = [c for c in graph_cliques(graph) if set(c.vertices) <= small | {table}]
         fits = self._sizes_fit(prims, table)
         corners = self.corners.match([c for c in scene_cliques if c.kind is CliqueKind.PLANES], prims,
@@ -167,15 +168,17 @@ class PsgMatcher:
         return out
 
 
-def _table_turned_over(graph: PrimitiveShapeGraph, max_extent: float) -> tuple[PrimitiveShapeGraph, int]:
-    """The graph with its largest plane longer than ``max_extent`` (the table) facing down, and its index
-    (-1 for none). A part rests on the table by one of its own faces, which faces down: the table is
-    that face's plane, so a part showing two faces still makes a corner with it."""
+def _table_turned_over(graph: PrimitiveShapeGraph, max_extent: float,
+                       table: int | None = None) -> tuple[PrimitiveShapeGraph, int]:
+    """The graph with its table facing down, and the table's index (-1 for none): the plane ``table``, or when
+    None its largest plane longer than ``max_extent``. A part rests on the table by one of its own faces,
+    which faces down: the table is that face's plane, so a part showing two faces still makes a corner with it."""
     prims = list(graph.primitives)
-    large = [k for k, p in enumerate(prims) if p.kind is PrimitiveKind.PLANE and np.max(p.box.extent) > max_extent]
-    if not large:
+    if table is None:
+        large = [k for k, p in enumerate(prims) if p.kind is PrimitiveKind.PLANE and np.max(p.box.extent) > max_extent]
+        table = max(large, key=lambda k: prims[k].n_points) if large else -1
+    if table < 0:
         return graph, -1
-    table = max(large, key=lambda k: prims[k].n_points)
     flipped = tuple(-v for v in prims[table].params)
     prims[table] = replace(prims[table], params=flipped)
     return PrimitiveShapeGraph(tuple(prims), graph.edges), table

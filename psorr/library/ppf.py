@@ -167,13 +167,15 @@ class PairTable:
         return frames_scene @ invert_rigid(frames_model), self.model[a]
 
 
-def scene_oriented_points(primitives, max_extent: float) -> tuple[np.ndarray, np.ndarray, list[int]]:
+def scene_oriented_points(primitives, max_extent: float,
+                          table: int | None = None) -> tuple[np.ndarray, np.ndarray, list[int]]:
     """PSORR's oriented scene points: plane centroids with normals and cylinder axes (the axis point
     nearest the centroid), as (K, 3) points and (K, 3) directions, and the indices of the K primitives
-    they come from. A primitive whose box is longer than ``max_extent`` metres (the table) is skipped."""
+    they come from. A primitive whose box is longer than ``max_extent`` metres (the table) is skipped, and
+    so is the primitive ``table`` indexes, when given."""
     pts, nrm, used = [], [], []
     for index, p in enumerate(primitives):
-        if max(p.box.extent) > max_extent:
+        if max(p.box.extent) > max_extent or index == table:
             continue
         if p.kind is PrimitiveKind.PLANE:
             pts.append(p.centroid)

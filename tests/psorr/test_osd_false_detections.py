@@ -13,11 +13,12 @@ from psorr.recognize import RecognizeParams, Recognizer
 LEARN = SHARED / "osd/learn"
 
 
-@pytest.mark.parametrize(("scene", "method", "model"), [("learn38", "orr", "circuit_board"),
-                                                        ("learn44", "psorr", "u_channel")])
+@pytest.mark.parametrize(("scene", "method", "model"), [("learn39", "psorr", "circuit_board"),
+                                                        ("learn40", "psorr", "circuit_board")])
 def test_a_pose_only_the_table_supports_is_not_a_detection(library, scene, method, model):
-    # At the far edge of the table, 1.6 m off, the depth tolerance (22 mm) is as tall as a board's components:
-    # posed flat there, a board or a channel's web is supported by the table alone.
+    # Posed flat on the table, a board's 1.6 mm is within the depth tolerance of the table, and where the
+    # tolerance is as tall as its components (22 mm at 1.6 m), all of it is supported by the table alone.
+    # These are the two of the 45 clouds where PSORR, with the rule off, poses one so; ORR poses none.
     path = LEARN / f"{scene}.pcd"
     if not path.is_file():
         pytest.skip(f"{path} is absent (the OSD data set is not installed)")

@@ -15,10 +15,12 @@ from psorr.synthetic.catalog import load_catalog, symmetric_add
 from psorr.synthetic.workpiece_scenes import workpiece_scene
 from psorr.types import OrientedBox, Primitive, PrimitiveKind
 
-# Occluded clutter scenes (the sensors benchmark's seeds 23 and 28) in which the pipe tee's run came out of
-# the decomposition as one cylinder and its branch as planar strips or not at all: no pair of primitives
-# voted for the tee. Measured: missed without poses from one cylinder, found with them.
-ONE_CYLINDER_TEES = (23, 28)
+# Occluded clutter scenes (seeds of the peers' clutter draw, benchmarks/peer_common.clutter_scene) in which
+# the pipe tee's run came out of the decomposition as one cylinder and its branch as planar strips or not at
+# all: no pair of primitives voted for the tee. Measured: missed without poses from one cylinder, found with
+# them (of the 45 scenes with a tee among seeds 0-79, these two; seed 28's, once one of them, is found
+# without them since the second look's narrower band, docs/decisions/0064-the-second-looks-band.md).
+ONE_CYLINDER_TEES = (23, 54)
 
 
 @pytest.fixture(scope="module")
@@ -103,7 +105,7 @@ def test_a_pipe_tee_showing_only_its_run_as_a_cylinder_is_recognised(parts, seed
                 if d.model == "pipe_tee" and symmetric_add(model.points[::10], d.T_cloud_model, tee.T_camera_model,
                                                            catalog["pipe_tee"]) < 0.1 * model.diameter]
 
-    # The resting-pose search finds some of these tees too (seed 28's), so it is off: the test is of the cylinder.
+    # The resting-pose search finds some such tees too, so it is off: the test is of the cylinder.
     no_rests = OutlineParams(enabled=False)
     assert found(RecognizeParams(outline=no_rests))
     assert not found(RecognizeParams(single_cylinder=SingleCylinderParams(enabled=False), outline=no_rests))
