@@ -52,22 +52,15 @@ def crop_to_parts(cloud: PointCloud, plane: np.ndarray | None, margin: float,
     index ``cloud``. Without a plane, or with nothing standing on it, the cloud comes back unchanged."""
     if not params.enabled or plane is None:
         return cloud
-    pts = cloud.points
-    finite = np.flatnonzero(cloud.valid_mask)
-    along, height = along_plane(pts[finite], plane)
-    off = height > params.off_plane
-    # Below the plane (a floor seen past the table's edge) no part can be: it goes too.
-    below = height < -params.off_plane
+    finite, cells, off, below = _on_grid(cloud, plane, params)
     if not off.any():
         return cloud
-    # Column by column: a reduction over axis 0 of an (N, 2) array took 5-7 ms on a 640x480 cloud.
-    lowest = np.array([along[:, 0].min(), along[:, 1].min()])
-    cells = np.floor((along - lowest) / params.cell).astype(np.int64)
     reach = int(np.ceil(margin / params.cell)) + 1  # one cell more: a point may sit anywhere in its cell
+    # Below the plane (a floor seen past the table's edge) no part can be: it goes too.
     far = below | (~off & ~_near_cells(cells, off, reach))
     if not far.any():
         return cloud
-    cropped = pts.copy()
+    cropped = cloud.points.copy()
     cropped[finite[far]] = np.nan
     return replace(cloud, points=cropped)
 
@@ -76,13 +69,10 @@ def band_rim(cloud: PointCloud, plane: np.ndarray, margin: float,
              params: SupportCropParams = SupportCropParams()) -> np.ndarray:
     """(N,) bool over the points of ``cloud`` (cropped by :func:`crop_to_parts` with ``margin``): those of the
     band's outer two cells, the points farthest along the ``plane`` from anything standing on it."""
-    finite = np.flatnonzero(cloud.valid_mask)
-    along, height = along_plane(cloud.points[finite], plane)
-    off = height > params.off_plane
+    finite, cells, off, _ = _on_grid(cloud, plane, params)
     rim = np.zeros(len(cloud.points), dtype=bool)
     if not off.any():
         return rim
-    cells = np.floor((along - np.array([along[:, 0].min(), along[:, 1].min()])) / params.cell).astype(np.int64)
     inner = int(np.ceil(margin / params.cell)) - 1  # crop_to_parts keeps up to this plus two
     rim[finite[~off & ~_near_cells(cells, off, max(inner, 1))]] = True
     return rim
@@ -95,6 +85,17 @@ def table_in_band(primitives, labels: np.ndarray, rim: np.ndarray) -> int:
     held = np.bincount(labels[rim & (labels >= 0)], minlength=len(primitives))
     planes = [k for k, p in enumerate(primitives) if p.kind is PrimitiveKind.PLANE and held[k] > 0]
     return max(planes, key=lambda k: held[k]) if planes else -1
+
+
+def _on_grid(cloud: PointCloud, plane: np.ndarray, params: SupportCropParams):
+    """The indices (M,) of the finite points of ``cloud``, their cells (M, 2) of the grid along the ``plane``,
+    and which of them (M,) stand on it and which lie below it, by ``params.off_plane``."""
+    finite = np.flatnonzero(cloud.valid_mask)
+    along, height = along_plane(cloud.points[finite], plane)
+    # Column by column: a reduction over axis 0 of an (N, 2) array took 5-7 ms on a 640x480 cloud.
+    lowest = np.array([along[:, 0].min(), along[:, 1].min()]) if len(along) else np.zeros(2)
+    cells = np.floor((along - lowest) / params.cell).astype(np.int64)
+    return finite, cells, height > params.off_plane, height < -params.off_plane
 
 
 def _near_cells(cells: np.ndarray, occupied: np.ndarray, reach: int) -> np.ndarray:
