@@ -4,7 +4,7 @@ A clip, a hinge or a plate lying on the table shows one face or none that the de
 find, and no pair. But a part on a table rests in one of a few stable poses, which leaves three
 unknowns: where it lies, and how it is turned about the table's normal. Each connected patch of
 points standing above the supporting plane is searched over those three, for every model in each of
-its most probable resting poses (:func:`psorr.synthetic.resting.stable_rests`): the cost of a pose is
+its stable resting poses (:func:`psorr.synthetic.resting.stable_rests`): the cost of a pose is
 how far the patch's points lie from the model's surface (the model's distance field) plus how far the
 model's silhouette reaches past the patch (the patch's distance field), each truncated at the point
 check's depth tolerance. A coarse grid of turns and shifts is refined around its best distinct turns,
@@ -38,10 +38,10 @@ class OutlineParams:
     ``height_slack`` and the depth tolerance): higher points are something else's. Patches are drawn on a
     grid of ``cell`` (also the distance fields' cell); a patch of at least ``min_area`` counts when at least
     ``min_standing_share`` of the points in its cells stand (noise lifts scattered table points, an object
-    all of them). Each model's ``rests`` most probable resting poses whose height is within ``height_slack``
-    of the patch's top are searched: turns in steps of ``angle_step_deg`` and shifts of the centre within
-    ``shift`` in steps of twice the cell, then the ``angles`` best turns at least four steps apart are
-    refined in steps of ``fine_angle_step_deg`` and half a cell. A pose's cost is the mean square of the
+    all of them). Each model's resting poses (its ``rests`` most probable; None: every one) whose height is
+    within ``height_slack`` of the patch's top are searched: turns in steps of ``angle_step_deg`` and shifts
+    of the centre within ``shift`` in steps of twice the cell, then the ``angles`` best turns at least four
+    steps apart are refined in steps of ``fine_angle_step_deg`` and half a cell. A pose's cost is the mean square of the
     distances (truncated at the point check's tolerance, over its square) of the patch's points to the model
     and of the silhouette to the patch, summed; poses costing more than ``max_cost`` are dropped (at 0.5,
     the points lie half a tolerance off on average both ways), and so are those costing more than
@@ -55,7 +55,7 @@ class OutlineParams:
     min_height: float = 0.0027
     min_area: float = 2e-4
     min_standing_share: float = 0.5
-    rests: int = 4
+    rests: int | None = None
     height_slack: float = 0.006
     angle_step_deg: float = 8.0
     fine_angle_step_deg: float = 2.0
@@ -71,7 +71,9 @@ class OutlineParams:
         check.positive(self, "sigmas", "angle_step_deg", "fine_angle_step_deg", "max_cost")
         check.within(self, "max_cost_ratio", low=1.0, high=float("inf"))
         check.within(self, "min_standing_share")
-        check.whole(self, "rests", "angles", "max_candidates")
+        check.whole(self, "angles", "max_candidates")
+        if self.rests is not None:
+            check.whole(self, "rests", note=" (None: every stable rest)")
 
 
 @dataclass(frozen=True, eq=False)
@@ -143,7 +145,7 @@ class OutlineMatcher:
         for index, model in enumerate(models):
             self.fields.append(DistanceField.of_points(model.points, params.cell, self.truncation))
             mesh = trimesh.Trimesh(model.vertices, model.faces, process=False)
-            for rest in stable_rests(mesh)[:params.rests]:
+            for rest in stable_rests(mesh)[:params.rests]:  # [:None]: every one
                 T = rest.T_table_model.copy()
                 seen = (model.points @ T[:3, :3].T + T[:3, 3])[:, :2]
                 T[:2, 3] -= seen.mean(axis=0)

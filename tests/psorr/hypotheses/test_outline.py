@@ -12,6 +12,7 @@ from psorr.recognize import Recognizer
 from psorr.recognize_params import RecognizeParams
 from psorr.synthetic.mesh_scenes import mesh_scene
 from psorr.synthetic.mesh_symmetry import find_symmetries, mesh_symmetric_add
+from psorr.synthetic.resting import stable_rests
 from psorr.verification.scene_view import SceneView
 
 pytest.importorskip("networkx", reason="trimesh's stable poses need networkx (pip install networkx)")
@@ -75,6 +76,9 @@ def test_outline_params_are_checked():
         OutlineParams(cell=0.0)
     with pytest.raises(InvalidInputError, match="rests"):
         OutlineParams(rests=0)
+    with pytest.raises(InvalidInputError, match="rests"):
+        OutlineParams(rests=2.0)
+    assert OutlineParams().rests is None and OutlineParams(rests=3).rests == 3
     with pytest.raises(InvalidInputError, match="min_standing_share"):
         OutlineParams(min_standing_share=1.5)
     assert RecognizeParams().outline.enabled
@@ -114,3 +118,17 @@ def test_a_plate_under_an_arm_is_its_own_patch_and_still_gets_its_pose(library):
     offsets = [_mean_offset(model, c.T_cloud_model, scene.instances[0].T_camera_model)
                for c in found.candidates if c.model == library.names.index("plate")]
     assert offsets and min(offsets) < 0.1 * model.diameter
+
+
+def test_a_part_in_its_least_probable_rest_gets_a_pose_from_every_rest_and_none_from_the_four_likeliest(library):
+    # Seed 4 lays the bracket in its 5th rest (of 5, 12% likely); the search tries every rest by default.
+    scene = mesh_scene(np.random.default_rng(4), PARTS, "single", names=["bracket"])
+    rests = stable_rests(PARTS["bracket"])
+    up = np.linalg.inv(scene.T_world_camera @ scene.instances[0].T_camera_model)[:3, 2]
+    assert np.argmax([np.linalg.inv(r.T_table_model)[:3, 2] @ up for r in rests]) == 4
+    model, view = library.model("bracket"), SceneView(scene.cloud)
+    for params, expected in ((OutlineParams(), True), (OutlineParams(rests=4), False)):
+        candidates = OutlineMatcher(library.models, params).candidates(scene.cloud, view).candidates
+        near = [_mean_offset(model, c.T_cloud_model, scene.instances[0].T_camera_model) < 0.1 * model.diameter
+                for c in candidates if library.models[c.model].name == "bracket"]
+        assert any(near) is expected, params.rests
