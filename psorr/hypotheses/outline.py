@@ -33,20 +33,20 @@ from psorr.verification.point_check import CheckParams, depth_tolerance
 class OutlineParams:
     """Resting-pose hypotheses; distances in metres, areas in m^2, angles in degrees.
 
-    A point stands on the table when it is higher than ``sigmas`` x the sensor's depth sigma at its depth,
-    and at least ``min_height``, and no higher than any model rests (the tallest resting shape, plus
-    ``height_slack`` and the depth tolerance): higher points are something else's. Patches are drawn on a
-    grid of ``cell`` (also the distance fields' cell); a patch of at least ``min_area`` counts when at least
-    ``min_standing_share`` of the points in its cells stand (noise lifts scattered table points, an object
-    all of them). Each model's resting poses (its ``rests`` most probable; None: every one) whose height is
-    within ``height_slack`` of the patch's top are searched: turns in steps of ``angle_step_deg`` and shifts
-    of the centre within ``shift`` in steps of twice the cell, then the ``angles`` best turns at least four
-    steps apart are refined in steps of ``fine_angle_step_deg`` and half a cell. A pose's cost is the mean square of the
-    distances (truncated at the point check's tolerance, over its square) of the patch's points to the model
-    and of the silhouette to the patch, summed; poses costing more than ``max_cost`` are dropped (at 0.5,
-    the points lie half a tolerance off on average both ways), and so are those costing more than
-    ``max_cost_ratio`` times the patch's cheapest. The ``max_candidates`` best poses of a scene, taken from
-    its patches in turn, go on to acceptance.
+    A point stands on the table when it is higher than ``sigmas`` x the sensor's depth sigma at its depth, and
+    at least ``min_height``, and no higher than any model rests (the tallest resting shape, plus
+    ``height_slack`` and the depth tolerance): higher points are something else's. Patches are drawn on a grid
+    of ``cell`` (also the distance fields' cell); a patch of at least ``min_area`` counts when at least
+    ``min_standing_share`` of the points in its cells stand (noise lifts scattered table points, an object all
+    of them). Each model's resting poses (its ``rests`` most probable; None: every one) whose height is within
+    ``height_slack`` of the patch's top are searched: turns in steps of ``angle_step_deg`` and shifts of the
+    centre within ``shift`` in steps of twice the cell, then the ``angles`` best turns at least four steps apart
+    are refined in steps of ``fine_angle_step_deg`` and half a cell. A pose's cost is the mean square of the
+    distances (truncated at the point check's tolerance, over its square) of the patch's points to the model and
+    of the silhouette to the patch, summed; poses costing more than ``max_cost`` are dropped (at 0.5, the points
+    lie half a tolerance off on average both ways), and so are those costing more than ``max_cost_ratio`` times
+    the patch's cheapest. The ``max_candidates`` best poses of a scene, taken from its patches in turn, go on to
+    acceptance.
     """
 
     enabled: bool = True

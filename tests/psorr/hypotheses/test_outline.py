@@ -130,5 +130,5 @@ def test_a_part_in_its_least_probable_rest_gets_a_pose_from_every_rest_and_none_
     for params, expected in ((OutlineParams(), True), (OutlineParams(rests=4), False)):
         candidates = OutlineMatcher(library.models, params).candidates(scene.cloud, view).candidates
         near = [_mean_offset(model, c.T_cloud_model, scene.instances[0].T_camera_model) < 0.1 * model.diameter
-                for c in candidates if library.models[c.model].name == "bracket"]
+                for c in candidates if c.model == library.names.index("bracket")]
         assert any(near) is expected, params.rests
