@@ -7,19 +7,22 @@ chassis lies across its view; recognition then reports the twin it could not rul
 on both), so the robot picks the part from its best pose anyway. After the lift it turns the part
 about the vertical, to the yaw at which the twins' rendered depths differ at the most pixels,
 looks, and has PSORR refine the pose there and tell the twins apart
-(:meth:`sim.skills.perception.Perception.look_at_held`). If the look settles on another twin, the place
-is planned again for the part as it is really held.
+(:meth:`sim.skills.perception.Perception.look_at_held`). A look that leaves a twin open is followed by
+one from the other side. The look is judged by what the arm leaves in view: the fingers hide some of the
+part. If the look settles on another twin, the place is planned again for the part as it is really held.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from psorr.sensing.camera import CameraIntrinsics
 from psorr.sensing.kinect_noise import KINECT_V1
 from psorr.verification.depth_compare import DepthRenderer, differs
+from psorr.verification.point_check import check_pose
+from psorr.verification.scene_view import SceneView
 from sim.control.cell import ArmCell
 from sim.errors import UnreachableTargetError
 from sim.skills.grasp_planning import angle_deg
@@ -29,17 +32,21 @@ TURN_S = 0.8  # s for the wrist's turn to the look, and back
 SETTLE_S = 0.3  # s held still before the look, so the part hangs steady
 MAX_OTHER_MOTION = 0.3  # rad any joint may move beyond the turn itself on the way to the look
 MIN_SCORE = 0.3  # an in-hand pose scoring less than this is not trusted to overrule the estimate
+OTHER_SIDE_DEG = 90.0  # a second look, when the first leaves a twin open, turns at least this far from it
 
 
 @dataclass(frozen=True)
 class InHandLook:
-    """What one look at the held part decided.
+    """What the looks at the held part decided (the last look's, when the first left a twin open).
 
     Attributes:
         chosen: index into the hypotheses looked at (0: the pose the pick was planned from).
         yaw_deg: the tool's turn about the vertical for the look; telling_pixels: the pixels at which
-            the twins' rendered depths differ there (the most of any yaw reachable).
-        score: the refined pose's score; settled: the look ruled out every other twin.
+            the twins' rendered depths differ there (the most of any yaw reachable, for a first look).
+        score: the refined pose's score over what the arm leaves in view (:func:`unhidden_score`);
+            settled: the look ruled out every other twin.
+        looks: how many looks it took (1 or 2).
+        nearest: the hypothesis the refined pose is nearest to, whether or not the look settled.
     """
 
     chosen: int
@@ -47,6 +54,8 @@ class InHandLook:
     telling_pixels: int
     score: float
     settled: bool
+    looks: int = 1
+    nearest: int = 0
 
     def summary(self) -> str:
         """One line for a pick's note."""
@@ -54,7 +63,9 @@ class InHandLook:
             return "no turn of the wrist to show the part at was reachable"
         verdict = ("held the other way round" if self.chosen else "held as estimated") if self.settled else \
             f"undecided (score {self.score:.2f}), kept the estimate"
-        return f"looked in the hand (turned {self.yaw_deg:+.0f} deg, {self.telling_pixels} telling px): {verdict}"
+        again = ", the second time" if self.looks > 1 else ""
+        return (f"looked in the hand (turned {self.yaw_deg:+.0f} deg{again}, {self.telling_pixels} telling px): "
+                f"{verdict}")
 
 
 def turned_about_vertical(T_world_tool: np.ndarray, degrees: float) -> np.ndarray:
@@ -87,7 +98,8 @@ def telling_pixels(renderer: DepthRenderer, T_camera_parts: np.ndarray, intrinsi
 
 def look_in_hand(cell: ArmCell, perception, part: str, q: np.ndarray, T_world_tool: np.ndarray,
                  T_tool_parts: list[np.ndarray]) -> InHandLook:
-    """Turn the held ``part`` about the vertical to show the twins' differences, look, and judge.
+    """Turn the held ``part`` about the vertical to show the twins' differences, look, and judge; when
+    that look leaves a twin open, look once more from the other side.
 
     Args:
         cell: the arm, holding the part at ``T_world_tool`` (4, 4) with joints ``q`` (nq,).
@@ -98,18 +110,47 @@ def look_in_hand(cell: ArmCell, perception, part: str, q: np.ndarray, T_world_to
     The arm ends where it started, at ``q``: a transport planned from the turned wrist can run the
     wrist into its joint limit.
     """
-    world = cell.world
-    model = perception.library.model(world.part_types[part])
-    renderer = DepthRenderer(model.vertices, model.faces)
-    T_camera_world = np.linalg.inv(world.T_world_camera)
+    model = perception.library.model(cell.world.part_types[part])
     hypotheses = np.array(T_tool_parts)
+    shows = _reachable_shows(cell, perception, model, q, T_world_tool, hypotheses)
+    if not shows:
+        return InHandLook(0, 0.0, 0, 0.0, False)
+    seen = _look_from(cell, perception, part, model, hypotheses, shows[0])
+    # The fingers hide other samples from the other side, and the faces the first look saw edge-on.
+    other = [s for s in shows if abs((s.yaw - shows[0].yaw + 180) % 360 - 180) >= OTHER_SIDE_DEG]
+    if not seen.settled and other:
+        first, seen = seen, replace(_look_from(cell, perception, part, model, hypotheses, other[0]), looks=2)
+        # Each look alone found the twin it prefers short of ruling the others out; two views from
+        # opposite sides, the fingers hiding different samples in each, preferring the same one settle it.
+        if not seen.settled and _trusted(first) and _trusted(seen) and first.nearest == seen.nearest:
+            seen = replace(seen, chosen=seen.nearest, settled=True)
+    cell.follow([q], TURN_S)
+    return seen
+
+
+@dataclass(frozen=True)
+class _Show:
+    """A reachable turn of the wrist: ``yaw`` degrees, the ``telling`` pixels there, the tool's pose
+    ``T_tool`` (4, 4, world) and the joints ``q`` that reach it."""
+
+    yaw: float
+    telling: int
+    T_tool: np.ndarray
+    q: np.ndarray
+
+
+def _reachable_shows(cell, perception, model, q, T_world_tool, hypotheses) -> list[_Show]:
+    """The turns of SHOW_YAWS_DEG that only the wrist makes, most telling pixels first (then the smallest
+    turn)."""
+    renderer = DepthRenderer(model.vertices, model.faces)
+    T_camera_world = np.linalg.inv(cell.world.T_world_camera)
     options = []
     for yaw in SHOW_YAWS_DEG:
         T_tool = turned_about_vertical(T_world_tool, yaw)
         n = telling_pixels(renderer, T_camera_world @ T_tool @ hypotheses, perception.camera.intrinsics,
                            0.5 * model.diameter)
         options.append((-n, abs(yaw), yaw, T_tool))
-    best = None
+    shows = []
     for neg_n, _, yaw, T_tool in sorted(options, key=lambda o: o[:2]):
         try:
             q_show = cell.solve(q, T_tool)
@@ -117,18 +158,32 @@ def look_in_hand(cell: ArmCell, perception, part: str, q: np.ndarray, T_world_to
             continue
         # Only the wrist should turn: a solution on another branch would swing the part through the cell.
         if np.abs(q_show[cell.qadr] - q[cell.qadr]).max() <= np.radians(abs(yaw)) + MAX_OTHER_MOTION:
-            best = (-neg_n, yaw, T_tool, q_show)
-            break
-    if best is None:
-        return InHandLook(0, 0.0, 0, 0.0, False)
-    n, yaw, T_tool, q_show = best
-    cell.follow([q_show], TURN_S)
+            shows.append(_Show(float(yaw), -neg_n, T_tool, q_show))
+    return shows
+
+
+def _look_from(cell, perception, part, model, hypotheses, show: _Show) -> InHandLook:
+    """Turn to ``show``, hold still, look, and judge which twin the part is held as."""
+    cell.follow([show.q], TURN_S)
     cell.hold(SETTLE_S)
-    detection, T_world_camera = perception.look_at_held(cell.data, part, T_tool @ hypotheses[0])
-    T_world_part = T_world_camera @ detection.T_cloud_model
+    look = perception.look_at_held(cell.data, part, show.T_tool @ hypotheses[0])
+    detection = look.detection
+    T_world_part = look.T_world_camera @ detection.T_cloud_model
     # The refined pose is one of the twins: the nearest by rotation.
-    turns = [angle_deg((T_tool @ H)[:3, :3].T @ T_world_part[:3, :3]) for H in hypotheses]
-    settled = not detection.alternatives and detection.score >= MIN_SCORE
-    chosen = int(np.argmin(turns)) if settled else 0
-    cell.follow([q], TURN_S)
-    return InHandLook(chosen, float(yaw), n, detection.score, settled)
+    turns = [angle_deg((show.T_tool @ H)[:3, :3].T @ T_world_part[:3, :3]) for H in hypotheses]
+    score = unhidden_score(look, model)
+    nearest = int(np.argmin(turns))
+    settled = not detection.alternatives and score >= MIN_SCORE
+    return InHandLook(nearest if settled else 0, show.yaw, show.telling, score, settled, nearest=nearest)
+
+
+def _trusted(look: InHandLook) -> bool:
+    return look.score >= MIN_SCORE
+
+
+def unhidden_score(look, model) -> float:
+    """The score of ``look``'s refined pose over only the samples the arm leaves in view: the share of its
+    camera-facing samples the measurement supports, less those seen through, where a sample behind the
+    fingers counts as hidden, not as unseen (their pixels are removed from the cloud PSORR refines on)."""
+    check = check_pose(SceneView(look.with_arm), model.points, model.normals, look.detection.T_cloud_model)
+    return check.unblocked_fraction * (1.0 - check.violation_ratio)

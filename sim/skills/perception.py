@@ -16,9 +16,7 @@ monitor while the arm moves (a 160x120 depth render every 0.25 s; see :mod:`sim.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from types import MappingProxyType
-from typing import NamedTuple
 
 import mujoco
 import numpy as np
@@ -29,6 +27,7 @@ from sim.control.ik import T_world_site
 from sim.devices.depth_render import DepthBodyRenderer
 from sim.devices.sensor import DepthCamera, SensorFrame, T_world_camera_opencv
 from sim.errors import SimInputError
+from sim.skills.looks import Estimate, HeldLook, Look
 from sim.skills.monitor_gate import MonitorGate, noise_margin
 from sim.skills.perception_params import PerceptionParams
 from sim.world import World
@@ -40,43 +39,6 @@ WORKSPACE_BELOW = 0.03  # m below the table top the workspace crop starts (the t
 MONITOR_CAMERA = CameraIntrinsics(width=160, height=120, fx=131.25, fy=131.25, cx=79.5, cy=59.5)
 MONITOR_OCCUPIED = INTRUSION_FRACTION * MONITOR_CAMERA.width * MONITOR_CAMERA.height  # intruding points
 """The monitor's depth stream: the Kinect's field of view at a quarter of its resolution."""
-
-
-class Estimate(NamedTuple):
-    """One detection of a part, in the world frame.
-
-    Attributes:
-        T_world_part: (4, 4) the part's pose.
-        score: the detection's score, in [0, 1].
-        alternatives: its near-symmetric twins (4, 4, world) that the look could not rule out
-            (:attr:`psorr.types.Detection.alternatives`).
-        colour: the palette name of the colour the look saw it in (``psorr.segment.supported_colour``), or None
-            when the look did not name colours.
-    """
-
-    T_world_part: np.ndarray
-    score: float
-    alternatives: tuple = ()
-    colour: str | None = None
-
-
-@dataclass(frozen=True, eq=False)
-class Look:
-    """One look at the cell before a pick.
-
-    Attributes:
-        frame: the Kinect frame (None when the look was an oracle's occupancy check only).
-        detections: PSORR's detections in the camera frame (empty for the oracle).
-        estimates: per part, its detections as :class:`Estimate` s, best score first.
-        intruding: how many points are above the workspace that neither a part nor the robot explains.
-        occupied: ``intruding`` reaches the threshold: someone is reaching in.
-    """
-
-    frame: SensorFrame | None
-    detections: tuple[Detection, ...]
-    estimates: MappingProxyType
-    intruding: int
-    occupied: bool
 
 
 class Perception:
@@ -165,17 +127,19 @@ class Perception:
         colour = supported_colour(cloud, detection, self._recognizer.library.model(detection.model))
         return None if colour is None else colour.name
 
-    def look_at_held(self, data: mujoco.MjData, part: str, T_world_part: np.ndarray) -> tuple[Detection, np.ndarray]:
+    def look_at_held(self, data: mujoco.MjData, part: str, T_world_part: np.ndarray) -> HeldLook:
         """Render the Kinect and refine the pose (4, 4, world) of ``part``, held up in the hand, from
         ``T_world_part`` (PSORR's :meth:`~psorr.recognize.Recognizer.refine`). The cloud is the look's
         crop without its ceiling (the part is above it) and without the arm's pixels (the fingers'
-        included). Returns the detection (camera frame) and ``T_world_camera`` (4, 4)."""
+        included)."""
         if self._recognizer is None:
             raise SimInputError("look_at_held needs a Perception built with recognize=True")
         frame = self.camera.render(data, self.rng, self._noise, rgb=False)
         T = frame.T_world_camera
-        cloud = self._workspace_cloud(frame, *self._world_points(frame))
-        return self._recognizer.refine(cloud, part, np.linalg.inv(T) @ T_world_part), T
+        world_pts, valid = self._world_points(frame)
+        cloud = self._workspace_cloud(frame, world_pts, valid)
+        with_arm = self._workspace_cloud(frame, world_pts, np.isfinite(frame.cloud.points[:, 2]))
+        return HeldLook(self._recognizer.refine(cloud, part, np.linalg.inv(T) @ T_world_part), T, with_arm)
 
     def _world_points(self, frame: SensorFrame) -> tuple[np.ndarray, np.ndarray]:
         """The frame's points in the world frame (N, 3; NaN rows stay NaN), and which are measured and

@@ -64,3 +64,38 @@ def test_without_eyes_the_twin_is_not_looked_for():
     T_true = world.body_pose("chassis")
     pick = pick_and_place(world, "chassis", T_true @ END_FOR_END, ArmCell(world), (T_true,))
     assert pick.in_hand is None and pick.grasped and not pick.placed
+
+
+def test_samples_behind_the_fingers_count_as_hidden_not_as_unseen():
+    """A look is judged by what the arm leaves in view: with a finger over half a chassis at its true pose,
+    the pose scores as it does with nothing over it, where the cloud PSORR refines on (the finger's pixels
+    removed) scores it by the samples left."""
+    from psorr.library.models import ModelLibrary
+    from psorr.synthetic.workpiece_scenes import workpiece_scene
+    from psorr.types import Detection
+    from psorr.verification.point_check import check_pose
+    from psorr.verification.scene_view import SceneView
+    from sim.skills.in_hand import unhidden_score
+    from sim.skills.looks import HeldLook
+
+    entry = load_catalog()["chassis"]
+    scene = workpiece_scene(np.random.default_rng(3), {"chassis": entry.load_mesh()}, ["chassis"])
+    model = ModelLibrary.from_meshes([entry.mesh_path]).model("chassis")
+    T = scene.instances[0].T_camera_model
+    cloud = scene.cloud
+    on_part = cloud.labels == 1
+    u = np.arange(len(cloud.points)) % cloud.width
+    finger = on_part & (u < np.median(u[on_part]))  # the left half of the part's pixels
+    nearer = cloud.points.copy()
+    nearer[finger] *= 0.9  # the finger, 10% nearer along the same rays
+    without = cloud.points.copy()
+    without[finger] = np.nan
+    with_arm = type(cloud)(nearer, width=cloud.width, height=cloud.height)
+    refined_on = type(cloud)(without, width=cloud.width, height=cloud.height)
+    bare = check_pose(SceneView(cloud), model.points, model.normals, T)
+    removed = check_pose(SceneView(refined_on), model.points, model.normals, T).score
+    look = HeldLook(Detection("chassis", T, removed, removed), np.eye(4), with_arm)
+    no_finger = HeldLook(look.detection, np.eye(4), cloud)
+    assert removed < 0.7 * bare.score
+    assert unhidden_score(no_finger, model) == pytest.approx(bare.unblocked_fraction * (1 - bare.violation_ratio))
+    assert unhidden_score(look, model) == pytest.approx(unhidden_score(no_finger, model), abs=0.05)
