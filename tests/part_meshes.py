@@ -30,9 +30,10 @@ def l_bracket(leg_a=0.05, leg_b=0.05, thickness=0.006, width=0.03) -> trimesh.Tr
     return mesh
 
 
-def plate_with_hole(offset=0.02) -> trimesh.Trimesh:
-    """An 80 x 50 x 6 mm plate with a 12 mm hole through it, ``offset`` from the centre along x."""
-    plate = trimesh.creation.box((0.08, 0.05, 0.006))
+def plate_with_hole(offset=0.02, thickness=0.006) -> trimesh.Trimesh:
+    """An 80 x 50 mm plate, 6 mm thick unless told, with a 12 mm hole through it, ``offset`` from the centre
+    along x."""
+    plate = trimesh.creation.box((0.08, 0.05, thickness))
     hole = trimesh.creation.cylinder(radius=0.006, height=0.02, sections=48)
     hole.apply_translation((offset, 0.0, 0.0))
     return trimesh.boolean.difference([plate, hole], engine="manifold")

@@ -20,6 +20,7 @@ from psorr.acceptance.continuation import on_larger_object
 from psorr.acceptance.icp import refine_icp
 from psorr.acceptance.params import AcceptParams
 from psorr.acceptance.render_judge import RenderJudge
+from psorr.acceptance.thin_parts import clear_of_table
 from psorr.hypotheses.candidates import Candidate
 from psorr.hypotheses.pose_clusters import same_pose
 from psorr.hypotheses.single_cylinder import SingleCylinderMatcher
@@ -156,7 +157,8 @@ class Acceptance:
         """The first bar the fitted pose fails, or None when it clears them all: seen enough, supported enough
         (above the table too), not seen through, and resting on the supporting plane rather than floating."""
         p = self.params
-        if check.n_support < p.min_support or check.n_support_above_table < p.min_support_above_table:
+        if check.n_support < p.min_support or not clear_of_table(
+                view, model, self.resolvers[model.name].renderer, T, check, p.min_support_above_table, p.check):
             return f"{check.n_support} points support it ({check.n_support_above_table} above the table)"
         if check.visible_fraction < p.min_visible_fraction and check.unblocked_fraction < p.min_unblocked_fraction:
             return f"{check.visible_fraction:.0%} of it seen"

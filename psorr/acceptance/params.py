@@ -19,10 +19,12 @@ class AcceptParams:
     when at least ``min_visible_fraction`` of its surface is measured, or, for a part partly hidden by
     others, ``min_unblocked_fraction`` of its unhidden points; when at least ``min_support`` points are
     supported, ``min_support_above_table`` of them higher above the supporting plane than their depth
-    tolerance; when at most ``max_violation_ratio`` of the measured points are seen through; when its lowest
-    point is no more than ``max_float`` above the supporting plane; and when the measured surface goes on
-    past its outline on no more than ``max_continued`` of a ring around it (``continuation``). A detection
-    sharing more than ``max_shared_pixels`` of its pixels with a better one is dropped.
+    tolerance (a part too thin at its depth to show that many is judged against the bare table instead:
+    :mod:`psorr.acceptance.thin_parts`); when at most ``max_violation_ratio`` of the measured points are
+    seen through; when its lowest point is no more than ``max_float`` above the supporting plane; and when
+    the measured surface goes on past its outline on no more than ``max_continued`` of a ring around it
+    (``continuation``). A detection sharing more than ``max_shared_pixels`` of its pixels with a better one
+    is dropped.
     """
 
     icp_distance: float = 0.012
@@ -32,8 +34,7 @@ class AcceptParams:
     max_violation_ratio: float = 0.05
     min_support: int = 60
     # The table explains the rest as well: a circuit board lying flat is supported by the table wherever
-    # it is posed on it. 0 turns this off, for a part so thin (a bare plate) that nothing of it stands
-    # higher than the tolerance. Measured: docs/decisions/0024-support-above-table.md.
+    # it is posed on it. 0 turns this off. Measured: docs/decisions/0024-support-above-table.md.
     min_support_above_table: int = 30
     max_float: float | None = 0.02  # None: parts piled on one another
     max_shared_pixels: float = 0.3

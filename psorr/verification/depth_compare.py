@@ -124,6 +124,21 @@ def rival_costs(view: SceneView, rivals: list[tuple[DepthRenderer, np.ndarray]],
     return cost[:, telling].sum(axis=1), int(telling.sum())
 
 
+def table_costs(view: SceneView, renderer: DepthRenderer, T_cloud_model: np.ndarray, centre: np.ndarray,
+                radius: float) -> tuple[np.ndarray, int]:
+    """(2,) costs, as :func:`residual_costs`, of the model at ``T_cloud_model`` with the supporting plane
+    behind it and of the bare plane, over the pixels around the sphere (``centre``, ``radius``) where the
+    model is rendered in front of the plane, however little (a plate thinner than the noise differs from
+    the table by less than DISCRIMINATIVE_SIGMAS everywhere); and how many pixels those are."""
+    window = _window_costs(view, centre, radius, lambda rays: np.vstack(
+        [renderer.depth(T_cloud_model[None], rays), np.full((1, len(rays)), np.inf)]))
+    if window is None:
+        return np.zeros(2), 0
+    cost, rendered, sigma = window
+    telling = rendered[0] < rendered[1]
+    return cost[:, telling].sum(axis=1), int(telling.sum())
+
+
 def _window_costs(view: SceneView, centre: np.ndarray, radius: float, render):
     """Over the measured pixels around the sphere (``centre``, ``radius``): each render's (K, P) squared depth
     residual in Kinect sigmas, capped at RESIDUAL_CAP (a render that misses where the sensor measured costs the
