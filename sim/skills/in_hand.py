@@ -14,6 +14,7 @@ part. If the look settles on another twin, the place is planned again for the pa
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -113,13 +114,15 @@ def look_in_hand(cell: ArmCell, perception, part: str, q: np.ndarray, T_world_to
     model = perception.library.model(cell.world.part_types[part])
     hypotheses = np.array(T_tool_parts)
     shows = _reachable_shows(cell, perception, model, q, T_world_tool, hypotheses)
-    if not shows:
+    show = next(shows, None)
+    if show is None:
         return InHandLook(0, 0.0, 0, 0.0, False)
-    seen = _look_from(cell, perception, part, model, hypotheses, shows[0])
-    # The fingers hide other samples from the other side, and the faces the first look saw edge-on.
-    other = [s for s in shows if abs((s.yaw - shows[0].yaw + 180) % 360 - 180) >= OTHER_SIDE_DEG]
-    if not seen.settled and other:
-        first, seen = seen, replace(_look_from(cell, perception, part, model, hypotheses, other[0]), looks=2)
+    # The fingers hide other samples from the other side, and the faces the first look saw edge-on. Its IK
+    # is solved before the first look, against where the person stands now, as the first turn's is.
+    other = next((s for s in shows if abs((s.yaw - show.yaw + 180) % 360 - 180) >= OTHER_SIDE_DEG), None)
+    seen = _look_from(cell, perception, part, model, hypotheses, show)
+    if not seen.settled and other is not None:
+        first, seen = seen, replace(_look_from(cell, perception, part, model, hypotheses, other), looks=2)
         # Each look alone found the twin it prefers short of ruling the others out; two views from
         # opposite sides, the fingers hiding different samples in each, preferring the same one settle it.
         if not seen.settled and _trusted(first) and _trusted(seen) and first.nearest == seen.nearest:
@@ -139,9 +142,9 @@ class _Show:
     q: np.ndarray
 
 
-def _reachable_shows(cell, perception, model, q, T_world_tool, hypotheses) -> list[_Show]:
+def _reachable_shows(cell, perception, model, q, T_world_tool, hypotheses) -> Iterator[_Show]:
     """The turns of SHOW_YAWS_DEG that only the wrist makes, most telling pixels first (then the smallest
-    turn)."""
+    turn); each turn's IK is solved only when the turn is asked for."""
     renderer = DepthRenderer(model.vertices, model.faces)
     T_camera_world = np.linalg.inv(cell.world.T_world_camera)
     options = []
@@ -150,7 +153,6 @@ def _reachable_shows(cell, perception, model, q, T_world_tool, hypotheses) -> li
         n = telling_pixels(renderer, T_camera_world @ T_tool @ hypotheses, perception.camera.intrinsics,
                            0.5 * model.diameter)
         options.append((-n, abs(yaw), yaw, T_tool))
-    shows = []
     for neg_n, _, yaw, T_tool in sorted(options, key=lambda o: o[:2]):
         try:
             q_show = cell.solve(q, T_tool)
@@ -158,8 +160,7 @@ def _reachable_shows(cell, perception, model, q, T_world_tool, hypotheses) -> li
             continue
         # Only the wrist should turn: a solution on another branch would swing the part through the cell.
         if np.abs(q_show[cell.qadr] - q[cell.qadr]).max() <= np.radians(abs(yaw)) + MAX_OTHER_MOTION:
-            shows.append(_Show(float(yaw), -neg_n, T_tool, q_show))
-    return shows
+            yield _Show(float(yaw), -neg_n, T_tool, q_show)
 
 
 def _look_from(cell, perception, part, model, hypotheses, show: _Show) -> InHandLook:
