@@ -12,8 +12,9 @@ from __future__ import annotations
 
 import os
 import uuid
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import ProcessPoolExecutor, as_completed
+from contextlib import contextmanager
 from pathlib import Path
 
 from sim.sweeps.spec import EpisodeSpec, Sweep
@@ -114,8 +115,7 @@ def run_local(specs: Iterable[EpisodeSpec], out: Path, workers: int,
     # Each worker a fresh interpreter (spawn): MuJoCo's renderer and Open3D do not survive a fork.
     import multiprocessing
 
-    with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"),
-                             initializer=one_thread_each) as executor:
+    with one_thread_each(), ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as executor:
         futures = [executor.submit(run_episode_rows, spec) for spec in specs]
         for future in as_completed(futures):
             episode, picks = future.result()
@@ -123,11 +123,22 @@ def run_local(specs: Iterable[EpisodeSpec], out: Path, workers: int,
             done(episode)
 
 
-def one_thread_each() -> None:
-    """Keep a worker's numerical libraries and its software renderer to one thread each. With as many workers
-    as cores, more threads only contend for the same cores. Runs before the worker imports them."""
-    for name in THREAD_VARIABLES:
-        os.environ[name] = "1"
+@contextmanager
+def one_thread_each() -> Iterator[None]:
+    """While open, processes started from this one keep their numerical libraries and software renderer to
+    one thread each: with as many workers as cores, more threads only contend for the same cores. It is set
+    in the environment they inherit, since a worker loads numpy, Open3D and MuJoCo (which read their thread
+    counts as they load) while it unpickles its first task, before any initializer of its own could run."""
+    before = {name: os.environ.get(name) for name in THREAD_VARIABLES}
+    os.environ.update(dict.fromkeys(THREAD_VARIABLES, "1"))
+    try:
+        yield
+    finally:
+        for name, value in before.items():
+            if value is None:
+                os.environ.pop(name, None)
+            else:
+                os.environ[name] = value
 
 
 def run_ray(specs: Iterable[EpisodeSpec], out: Path, address: str | None,

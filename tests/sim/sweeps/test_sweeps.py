@@ -8,6 +8,7 @@ import pytest
 from sim.cli import main
 from sim.errors import TaskFileError
 from sim.sweeps import gather, load_sweep, pending, run_local, run_ray
+from sim.sweeps.run import THREAD_VARIABLES, one_thread_each
 
 REPO = Path(__file__).resolve().parents[3]
 SWEEP = ("tasks: [{task}]\nseeds: 2\nposes: [oracle]\noccluder: [true, false]\n")
@@ -79,3 +80,24 @@ def test_a_stopped_sweep_resumes_without_repeating_or_losing_an_episode(sweep_fi
     assert [r["id"] for r in rows] == [s.id for s in sweep.episodes]
     assert all((out / "rows" / name).stat().st_mtime_ns == t for name, t in first.items())  # not run again
     assert (out / "grasp_success.png").is_file()
+
+
+def _thread_counts_at_start() -> dict:
+    import os
+
+    return {name: os.environ.get(name) for name in THREAD_VARIABLES}
+
+
+def test_pool_workers_start_with_one_thread_each_and_this_process_keeps_its_own(monkeypatch):
+    """A worker's libraries read their thread counts as they load, before any initializer could run, so the
+    counts must already be in the environment the worker starts with; this process's are put back."""
+    import multiprocessing
+    import os
+    from concurrent.futures import ProcessPoolExecutor
+
+    monkeypatch.setenv("OMP_NUM_THREADS", "7")
+    monkeypatch.delenv("LP_NUM_THREADS", raising=False)
+    with one_thread_each(), ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn")) as pool:
+        seen = pool.submit(_thread_counts_at_start).result()
+    assert seen == dict.fromkeys(THREAD_VARIABLES, "1")
+    assert os.environ["OMP_NUM_THREADS"] == "7" and "LP_NUM_THREADS" not in os.environ
