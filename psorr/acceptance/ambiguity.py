@@ -5,7 +5,7 @@ tray turned end for end: every primitive has its twin. Verification at the primi
 cannot tell the two poses apart, and the turned one is often accepted. The difference lies in
 small features (a window, a gland hole, a row of holes) that only a dense point check sees.
 
-:mod:`psorr.library.symmetries` finds, once per model, its near-symmetric half turns, an axis of
+:mod:`psorr.library.symmetries` finds, once per model, its near-symmetric turns, an axis of
 near-continuous symmetry (a flanged hub) and a direction it slides along almost onto itself (a
 U-channel): ICP cannot place such a part along it, and a pose from primitive pairs can start a
 centimetre or two off there, or several when others hide part of its faces
@@ -13,7 +13,7 @@ centimetre or two off there, or several when others hide part of its faces
 :class:`NearSymmetryResolver` re-fits each turned pose with ICP, searches the turn about the axis or
 the slide along the direction, and keeps the pose whose rendered depth (:mod:`psorr.verification.depth_compare`)
 agrees best with the measurement where the candidates differ. When the features are hidden the
-poses cannot be told apart: the original is kept, and the half turns the view did not rule out are
+poses cannot be told apart: the original is kept, and the turns the view did not rule out are
 returned with it, for a detection's ``alternatives``.
 """
 
@@ -61,7 +61,7 @@ _FOUND: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 class NearSymmetryResolver:
     """Chooses between a model's near-symmetric poses in a scene by render and compare.
 
-    Built once per model: its near-symmetric half turns (:func:`near_symmetries`) and its axis of
+    Built once per model: its near-symmetric turns (:func:`near_symmetries`) and its axis of
     near-continuous symmetry (:func:`near_continuous_axis`), if any. :meth:`resolve` takes a refined
     detection and returns the pose, among those the model cannot tell apart by its larger surfaces,
     whose rendered depth agrees best with the measurement where the candidates differ.
@@ -72,25 +72,25 @@ class NearSymmetryResolver:
         self.renderer = DepthRenderer(model.vertices, model.faces)
         found = _FOUND.get(model)
         if found is None:  # about 0.1 s a model, so once per model object however many recognizers use it
-            turns = near_symmetries(model.points, model.diameter)
+            axis = near_continuous_axis(model, self.renderer)
+            turns = near_symmetries(model.points, model.diameter, axis=None if axis is None else axis[1])
             # Exact symmetries (the transformer's, the bushing's) need no choosing: their poses are one part.
             turns = turns[~exact_symmetries(self.renderer, model.points, turns)]
-            found = _FOUND[model] = (turns, exact_but_features(model.points, turns),
-                                     near_continuous_axis(model, self.renderer),
+            found = _FOUND[model] = (turns, exact_but_features(model.points, turns), axis,
                                      near_uniform_direction(model, self.renderer))
         self.turns, self._exact_but_features, self.axis, self.slide = found
         self._centre = model.points.mean(axis=0)
 
     @property
     def has_broad_twins(self) -> bool:
-        """Does a half turn move much of the surface (an L bracket's legs swapped), not only small features
+        """Does a near-symmetric turn move much of the surface (an L bracket's legs swapped), not only small features
         (the chassis' window)? Then the point check, too, tells the twin poses apart."""
         return bool((~self._exact_but_features).any())
 
     def resolve(self, view: SceneView, T_cloud_model: np.ndarray,
                 icp_distance: float) -> tuple[np.ndarray, PoseCheck, tuple[np.ndarray, ...]]:
         """The best pose (4, 4), its dense :class:`PoseCheck`, and the near-symmetric poses (4, 4) the
-        view could not rule out (its half turns within UNRESOLVED_RATIO of the best's residual)."""
+        view could not rule out (its turns within UNRESOLVED_RATIO of the best's residual)."""
         T = T_cloud_model
         if self.slide is not None:
             T = self._best_slide(view, T)

@@ -1,10 +1,11 @@
 """A model's near-symmetries: turns and slides that map it almost onto itself, found once per model.
 
 A sheet-metal tray with a connector window at one end is, to a point-pair matcher, the same
-tray turned end for end. :func:`near_symmetries` finds the half turns about its principal axes
-(through the centroid of its samples), each settled onto the model by ICP, that move its surface
-by little on average (an L bracket's legs swap about their bisector, a few degrees off its
-principal axes); exact symmetries qualify too, and :func:`exact_symmetries` tells them apart.
+tray turned end for end. :func:`near_symmetries` finds the turns about its principal axes (through
+the centroid of its samples; half turns, and turns by 360/n degrees, as a knob of three lobes has),
+each settled onto the model by ICP, that move its surface by little on average (an L bracket's legs
+swap about their bisector, a few degrees off its principal axes); exact symmetries qualify too, and
+:func:`exact_symmetries` tells them apart.
 :func:`near_continuous_axis` finds an axis about which any turn is a near-symmetry (a flanged hub,
 whose yaw only its bolt holes fix). :func:`near_uniform_direction` finds a direction along which the
 part slides almost onto itself (a U-channel along its length, which only its two end faces fix).
@@ -32,33 +33,89 @@ TEST_SHIFT, UNIFORM_LIMIT = 0.05, 0.1
 # A half turn that moves fewer than FEATURE_SHARE of the samples further than FEATURE_MOVE from the surface
 # is exact but for small features (the chassis' window and gland hole).
 FEATURE_MOVE, FEATURE_SHARE = 0.002, 0.1
+# Besides the half turns, the turns by 360 k / n degrees for n from 3 to MAX_ORDER, as
+# psorr.synthetic.mesh_symmetry tries them when it grades poses (a three-lobed knob turned by 120 degrees).
+MAX_ORDER = 8
+PARALLEL_COS = np.cos(np.radians(10.0))  # a principal axis within 10 degrees of a near-continuous axis is it
 
 
-def near_symmetries(points: np.ndarray, diameter: float, limit: float = NEAR_MEAN_DISTANCE) -> np.ndarray:
-    """(K, 4, 4) model-frame near-symmetries S: half turns about principal axes through the samples'
-    centroid, each settled by ICP of S(points) onto points, whose mean nearest-sample distance
-    is below ``limit`` x ``diameter``; one per distinct turn, and K may be 0.
+def near_symmetries(points: np.ndarray, diameter: float, limit: float = NEAR_MEAN_DISTANCE,
+                    axis: np.ndarray | None = None) -> np.ndarray:
+    """(K, 4, 4) model-frame near-symmetries S about principal axes through the samples' centroid, each
+    settled by ICP of S(points) onto points, whose mean nearest-sample distance is below ``limit`` x
+    ``diameter``: a half turn about each axis, and about an axis the part is round across (in its second
+    moments, as any n-fold symmetry makes it) the turns of the lowest order n (3 to MAX_ORDER) whose every
+    turn k / n settles near its own angle. One per distinct turn; K may be 0. No turns of order n > 2 are
+    tried about ``axis`` (a near-continuous axis, whose every angle is searched on its own).
 
     Args:
         points: (N, 3) even surface samples of the model, metres.
         diameter: the model's diameter, metres.
+        axis: (3,) a direction, model frame, about which to try half turns only; None for none.
     """
     centroid = points.mean(axis=0)
-    _, axes = np.linalg.eigh(np.cov((points - centroid).T))
+    moments, axes = np.linalg.eigh(np.cov((points - centroid).T))
     tree = cKDTree(points)
     subset = points[:: max(1, len(points) // 3000)]
     found = []
-    for axis in axes.T:
-        R = 2.0 * np.outer(axis, axis) - np.eye(3)  # a half turn about the axis
+
+    def settled(direction: np.ndarray, angle: float) -> tuple[np.ndarray, float]:
         S = np.eye(4)
-        S[:3, :3], S[:3, 3] = R, centroid - R @ centroid
+        S[:3, :3] = turn(direction, angle)
+        S[:3, 3] = centroid - S[:3, :3] @ centroid
         # A part that is not quite symmetric (an L bracket with legs of 60 and 50 mm) has its
         # principal axes a few degrees off the turn that swaps its halves; settle onto that turn.
         S, distance = _settled(S, subset, tree)
-        duplicate = any(np.linalg.norm(S[:3, :3] - F[:3, :3]) < 0.1 for F in found)
-        if distance.mean() < limit * diameter and not duplicate:
+        return S, float(distance.mean())
+
+    def add(S: np.ndarray) -> None:
+        if not any(np.linalg.norm(S[:3, :3] - F[:3, :3]) < 0.1 for F in found):
             found.append(S)
+
+    for i, direction in enumerate(axes.T):
+        S, mean = settled(direction, np.pi)
+        if mean < limit * diameter:
+            add(S)
+        about_axis = axis is not None and abs(float(direction @ axis)) > PARALLEL_COS
+        across = np.delete(moments, i)
+        if not about_axis and _round_in_plane(across, limit * diameter):
+            # A turn off by delta moves samples at the rms radius r by r delta: at most the limit.
+            drift = limit * diameter / np.sqrt(across.sum())
+            for S in _cyclic_turns(direction, settled, limit * diameter, drift):
+                add(S)
     return np.array(found).reshape(-1, 4, 4)
+
+
+def _cyclic_turns(direction: np.ndarray, settled, limit: float, drift: float) -> list[np.ndarray]:
+    """The turns k / n (k = 1 .. n-1) of the lowest order n (3 to MAX_ORDER) about ``direction`` that all
+    settle (``settled(direction, angle)`` -> (S, mean distance)) below ``limit`` (m) within ``drift`` (rad)
+    of their own angle; none if no order does. A turn that ICP moves further has slid towards another
+    symmetry (a square bar's 120 degrees towards its 90) and stopped short of it."""
+    for n in range(3, MAX_ORDER + 1):
+        group = []
+        for k in range(1, n):
+            angle = 2.0 * np.pi * k / n
+            S, mean = settled(direction, angle)
+            if mean >= limit or _angle(S[:3, :3] @ turn(direction, angle).T) > drift:
+                break
+            group.append(S)
+        else:
+            return group
+    return []
+
+
+def _round_in_plane(moments: np.ndarray, move: float) -> bool:
+    """Could a turn other than a half turn about an axis be a near-symmetry, given the two principal
+    moments (2,) (m^2) across it? A turn by theta changes the in-plane covariance by sqrt(2) |a - b| |sin theta|,
+    and one that moves the samples by ``move`` (m) on average changes it by about 2 r move, r the rms radius
+    in the plane; with |sin theta| at least sin 45 degrees (orders up to 8) the moments may differ by 2 r move."""
+    a, b = moments
+    return abs(a - b) <= 2.0 * np.sqrt(max(a + b, 0.0)) * move
+
+
+def _angle(R: np.ndarray) -> float:
+    """The angle (rad) of the rotation R (3, 3)."""
+    return float(np.arccos(np.clip(0.5 * (np.trace(R) - 1.0), -1.0, 1.0)))
 
 
 def _settled(S: np.ndarray, points: np.ndarray, tree: cKDTree, iterations: int = 15) -> tuple[np.ndarray, np.ndarray]:

@@ -1,0 +1,47 @@
+"""Near-symmetric turns of parts made inside the test: a three-lobed knob's thirds, a box's half turns."""
+
+import numpy as np
+import trimesh
+
+from psorr.library.symmetries import _angle, near_symmetries
+
+
+def _samples(mesh: trimesh.Trimesh, count: int = 6000) -> tuple[np.ndarray, float]:
+    points, _ = trimesh.sample.sample_surface_even(mesh, count, seed=0)
+    return np.asarray(points), float(np.linalg.norm(mesh.extents))
+
+
+def _three_lobed_knob() -> trimesh.Trimesh:
+    """A 12 mm disc with three 8 mm lobes 120 degrees apart, and a 2 mm key on one lobe that makes the
+    thirds near-symmetries rather than exact ones."""
+    parts = [trimesh.creation.cylinder(radius=0.012, height=0.01, sections=48)]
+    for k in range(3):
+        a = 2.0 * np.pi * k / 3
+        lobe = trimesh.creation.cylinder(radius=0.008, height=0.01, sections=32)
+        lobe.apply_translation([0.014 * np.cos(a), 0.014 * np.sin(a), 0.0])
+        parts.append(lobe)
+    key = trimesh.creation.box([0.002, 0.002, 0.004])
+    key.apply_translation([0.02, 0.0, 0.007])
+    return trimesh.util.concatenate(parts + [key])
+
+
+def test_a_three_lobed_knob_turns_by_thirds_about_its_axis():
+    points, diameter = _samples(_three_lobed_knob())
+    turns = near_symmetries(points, diameter)
+    thirds = [S for S in turns if abs(np.degrees(_angle(S[:3, :3])) - 120.0) < 5.0]
+    assert len(thirds) == 2  # by 120 and by 240 degrees
+    for S in thirds:
+        assert np.allclose(S[:3, :3] @ [0.0, 0.0, 1.0], [0.0, 0.0, 1.0], atol=0.05)  # about the axis, z
+
+
+def test_a_box_of_three_different_sides_has_half_turns_only():
+    points, diameter = _samples(trimesh.creation.box([0.06, 0.045, 0.03]))
+    turns = near_symmetries(points, diameter)
+    assert len(turns) == 3
+    assert all(abs(np.degrees(_angle(S[:3, :3])) - 180.0) < 3.0 for S in turns)
+
+
+def test_a_square_bar_turns_by_quarters_about_its_length():
+    points, diameter = _samples(trimesh.creation.box([0.03, 0.03, 0.08]))
+    angles = sorted(round(np.degrees(_angle(S[:3, :3]))) for S in near_symmetries(points, diameter))
+    assert angles.count(90) == 2  # by 90 and by 270 degrees about its length
