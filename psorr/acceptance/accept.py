@@ -26,7 +26,7 @@ from psorr.hypotheses.pose_clusters import same_pose
 from psorr.hypotheses.single_cylinder import SingleCylinderMatcher
 from psorr.library.models import Model, ModelLibrary
 from psorr.types import Detection
-from psorr.verification.point_check import CheckParams, PoseCheck, check_pose, check_poses
+from psorr.verification.point_check import CheckParams, PoseCheck, check_pose, check_poses, depth_tolerance
 from psorr.verification.scene_view import SceneView
 from psorr.viz.observer import observer
 
@@ -166,6 +166,8 @@ class Acceptance:
             return f"{check.violation_ratio:.0%} of it seen through"
         if floats_above(view.support_plane, model.points[::4], T, p.max_float):
             return "floats above the table"
+        if sinks_into_table(view, model.points[::4], T, p.check):
+            return "sinks into the table"
         return None
 
     def _resolved(self, view: SceneView, model: Model, T: np.ndarray) -> Detection:
@@ -233,3 +235,26 @@ def floats_above(plane: np.ndarray | None, model_points: np.ndarray, T_cloud_mod
         return False
     lowest = (model_points @ T_cloud_model[:3, :3].T + T_cloud_model[:3, 3]) @ plane[:3] + plane[3]
     return bool(lowest.min() > max_float)
+
+
+def sinks_into_table(view: SceneView, model_points: np.ndarray, T_cloud_model: np.ndarray, params: CheckParams) -> bool:
+    """Does some point of ``model_points`` (N, 3), posed by ``T_cloud_model`` (4, 4), lie deeper below the
+    supporting plane than its depth tolerance, where the sensor measured the table in front of it? No
+    part can: a pose that fits a small part's faces to a larger one's edge or to noise on the table may
+    leave the rest of it inside the table, where the point check counts it hidden, not seen through.
+    Where the sensor measured something below the plane instead (a floor beside a box taken for the
+    table), the point is not counted. False without a plane."""
+    plane = view.support_plane
+    if plane is None:
+        return False
+    points = model_points @ T_cloud_model[:3, :3].T + T_cloud_model[:3, 3]
+    tolerance = depth_tolerance(points[:, 2], params)
+    sunk = points[points @ plane[:3] + plane[3] < -tolerance]
+    if len(sunk) == 0:
+        return False
+    u, v, inside = view.project(sunk)
+    z = view.depth[v * view.width + u]
+    measured = np.column_stack([(u - view.cx) / view.focal, (v - view.cy) / view.focal, np.ones(len(u))]) * z[:, None]
+    with np.errstate(invalid="ignore"):
+        on_table = np.abs(measured @ plane[:3] + plane[3]) < depth_tolerance(z, params)
+    return bool((inside & np.isfinite(z) & on_table).any())
