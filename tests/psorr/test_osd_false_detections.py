@@ -7,6 +7,7 @@ import pytest
 from paths import SHARED
 
 from psorr import AcceptParams
+from psorr.acceptance import accept
 from psorr.io.clouds import read_cloud
 from psorr.recognize import RecognizeParams, Recognizer
 
@@ -15,15 +16,20 @@ LEARN = SHARED / "osd/learn"
 
 @pytest.mark.parametrize(("scene", "method", "model"), [("learn39", "psorr", "circuit_board"),
                                                         ("learn40", "psorr", "circuit_board")])
-def test_a_pose_only_the_table_supports_is_not_a_detection(library, scene, method, model):
+def test_a_pose_only_the_table_supports_is_not_a_detection(library, scene, method, model, monkeypatch):
     # Posed flat on the table, a board's 1.6 mm is within the depth tolerance of the table, and where the
     # tolerance is as tall as its components (22 mm at 1.6 m), all of it is supported by the table alone.
     # These are the two of the 45 clouds where PSORR, with the rule off, poses one so; ORR poses none.
+    # In learn40 the board also sinks into the table, which a later rule refuses; it is left out here, so
+    # that the rule under test is the one that refuses the pose.
     path = LEARN / f"{scene}.pcd"
     if not path.is_file():
         pytest.skip(f"{path} is absent (the OSD data set is not installed)")
     cloud = read_cloud(path)
+    monkeypatch.setattr(accept, "sinks_into_table", lambda *args: False)
     ruled_off = Recognizer(library, method, RecognizeParams(acceptance=AcceptParams(min_support_above_table=0)))
     found = [d.model for d in ruled_off.recognize(cloud, np.random.default_rng(0)).detections]
     assert found and set(found) == {model}, found
+    assert Recognizer(library, method).recognize(cloud, np.random.default_rng(0)).detections == ()
+    monkeypatch.undo()
     assert Recognizer(library, method).recognize(cloud, np.random.default_rng(0)).detections == ()
