@@ -21,7 +21,8 @@ class AcceptParams:
     supported, ``min_support_above_table`` of them higher above the supporting plane than their depth
     tolerance (a part too thin at its depth to show that many is judged against the bare table instead:
     :mod:`psorr.acceptance.thin_parts`); when at most ``max_violation_ratio`` of the measured points are
-    seen through; when its lowest point is no more than ``max_float`` above the supporting plane; and when
+    seen through; when its lowest point is no more than ``max_float`` above the supporting plane, and none
+    lies inside the table deeper than its depth tolerance (:func:`psorr.acceptance.accept.sinks_into_table`); and when
     the measured surface goes on past its outline on no more than ``max_continued`` of a ring around it
     (``continuation``). A detection sharing more than ``max_shared_pixels`` of its pixels with a better one
     is dropped.
