@@ -254,7 +254,7 @@ def sinks_into_table(view: SceneView, model_points: np.ndarray, T_cloud_model: n
         return False
     u, v, inside = view.project(sunk)
     z = view.depth[v * view.width + u]
-    measured = np.column_stack([(u - view.cx) / view.focal, (v - view.cy) / view.focal, np.ones(len(u))]) * z[:, None]
+    measured = view.rays(u, v) * z[:, None]
     with np.errstate(invalid="ignore"):
         on_table = np.abs(measured @ plane[:3] + plane[3]) < depth_tolerance(z, params)
     return bool((inside & np.isfinite(z) & on_table).any())

@@ -33,9 +33,14 @@ def from_rotation_vector(rotvec: np.ndarray) -> np.ndarray:
     return turn(rotvec / angle, angle)
 
 
+def rotation_angle(R: np.ndarray) -> float:
+    """The angle (radians, in [0, pi]) of the rotation ``R`` (3, 3)."""
+    return float(np.arccos(np.clip((np.trace(R) - 1.0) / 2.0, -1.0, 1.0)))
+
+
 def rotation_vector(R: np.ndarray) -> np.ndarray:
     """(3,) rotation vector (axis times angle in radians, angle in [0, pi]) of the rotation ``R`` (3, 3)."""
-    angle = float(np.arccos(np.clip((np.trace(R) - 1.0) / 2.0, -1.0, 1.0)))
+    angle = rotation_angle(R)
     skew = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
     if angle < 1e-6:
         return skew / 2.0  # sin(angle) ~ angle: the skew part is 2 x the rotation vector

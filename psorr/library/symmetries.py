@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from psorr.geometry.rotations import turn
+from psorr.geometry.rotations import rotation_angle, turn
 from psorr.types import PrimitiveKind
 from psorr.verification.depth_compare import DepthRenderer
 
@@ -96,7 +96,7 @@ def _cyclic_turns(direction: np.ndarray, settled, limit: float, drift: float) ->
         for k in range(1, n):
             angle = 2.0 * np.pi * k / n
             S, mean = settled(direction, angle)
-            if mean >= limit or _angle(S[:3, :3] @ turn(direction, angle).T) > drift:
+            if mean >= limit or rotation_angle(S[:3, :3] @ turn(direction, angle).T) > drift:
                 break
             group.append(S)
         else:
@@ -111,11 +111,6 @@ def _round_in_plane(moments: np.ndarray, move: float) -> bool:
     in the plane; with |sin theta| at least sin 45 degrees (orders up to 8) the moments may differ by 2 r move."""
     a, b = moments
     return abs(a - b) <= 2.0 * np.sqrt(max(a + b, 0.0)) * move
-
-
-def _angle(R: np.ndarray) -> float:
-    """The angle (rad) of the rotation R (3, 3)."""
-    return float(np.arccos(np.clip(0.5 * (np.trace(R) - 1.0), -1.0, 1.0)))
 
 
 def _settled(S: np.ndarray, points: np.ndarray, tree: cKDTree, iterations: int = 15) -> tuple[np.ndarray, np.ndarray]:

@@ -82,7 +82,7 @@ def pixel_window(view: SceneView, centre: np.ndarray, radius: float) -> tuple[np
     pixels = (V * view.width + U).ravel()
     measured = np.isfinite(view.depth[pixels])
     pixels, U, V = pixels[measured], U.ravel()[measured], V.ravel()[measured]
-    rays = np.column_stack([(U - view.cx) / view.focal, (V - view.cy) / view.focal, np.ones(len(pixels))])
+    rays = view.rays(U, V)
     return pixels, rays
 
 

@@ -187,6 +187,10 @@ class SceneView:
         """Flat index of the pixel block each pixel (u, v) falls in."""
         return (v // _SELF_BLOCK) * (self.width // _SELF_BLOCK + 1) + u // _SELF_BLOCK
 
+    def rays(self, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """(P, 3) rays through the pixels (u, v) (P,), scaled to z = 1: the point at depth z is z times its ray."""
+        return np.column_stack([(u - self.cx) / self.focal, (v - self.cy) / self.focal, np.ones(len(u))])
+
     def project(self, points: np.ndarray):
         """Pixel (u, v) of (N, 3) points and an in-bounds mask (N,)."""
         z = np.maximum(points[:, 2], 1e-9)

@@ -18,6 +18,7 @@ import mujoco
 import numpy as np
 import trimesh
 
+from psorr.geometry.rotations import rotation_angle
 from sim.control.cell import ArmCell
 from sim.errors import UnreachableTargetError
 from sim.skills.finger_clearance import approach_opening, fingers_clear_fixture
@@ -38,7 +39,7 @@ def from_above(approach_world: np.ndarray) -> bool:
 
 def angle_deg(R: np.ndarray) -> float:
     """Rotation angle (degrees) of a (3, 3) rotation matrix."""
-    return float(np.degrees(np.arccos(np.clip((np.trace(R) - 1.0) / 2.0, -1.0, 1.0))))
+    return float(np.degrees(rotation_angle(R)))
 
 
 def tool_pose(T_world_part: np.ndarray, grasp, flip: bool) -> np.ndarray:

@@ -3,7 +3,8 @@
 import numpy as np
 import trimesh
 
-from psorr.library.symmetries import _angle, near_symmetries
+from psorr.geometry.rotations import rotation_angle
+from psorr.library.symmetries import near_symmetries
 
 
 def _samples(mesh: trimesh.Trimesh, count: int = 6000) -> tuple[np.ndarray, float]:
@@ -28,7 +29,7 @@ def _three_lobed_knob() -> trimesh.Trimesh:
 def test_a_three_lobed_knob_turns_by_thirds_about_its_axis():
     points, diameter = _samples(_three_lobed_knob())
     turns = near_symmetries(points, diameter)
-    thirds = [S for S in turns if abs(np.degrees(_angle(S[:3, :3])) - 120.0) < 5.0]
+    thirds = [S for S in turns if abs(np.degrees(rotation_angle(S[:3, :3])) - 120.0) < 5.0]
     assert len(thirds) == 2  # by 120 and by 240 degrees
     for S in thirds:
         assert np.allclose(S[:3, :3] @ [0.0, 0.0, 1.0], [0.0, 0.0, 1.0], atol=0.05)  # about the axis, z
@@ -38,10 +39,10 @@ def test_a_box_of_three_different_sides_has_half_turns_only():
     points, diameter = _samples(trimesh.creation.box([0.06, 0.045, 0.03]))
     turns = near_symmetries(points, diameter)
     assert len(turns) == 3
-    assert all(abs(np.degrees(_angle(S[:3, :3])) - 180.0) < 3.0 for S in turns)
+    assert all(abs(np.degrees(rotation_angle(S[:3, :3])) - 180.0) < 3.0 for S in turns)
 
 
 def test_a_square_bar_turns_by_quarters_about_its_length():
     points, diameter = _samples(trimesh.creation.box([0.03, 0.03, 0.08]))
-    angles = sorted(round(np.degrees(_angle(S[:3, :3]))) for S in near_symmetries(points, diameter))
+    angles = sorted(round(np.degrees(rotation_angle(S[:3, :3]))) for S in near_symmetries(points, diameter))
     assert angles.count(90) == 2  # by 90 and by 270 degrees about its length
