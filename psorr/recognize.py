@@ -1,17 +1,12 @@
-"""Recognition: PSORR over primitive pairs, or the ORR baseline over raw points.
+"""Recognition: PSORR over primitive pairs, PSG over shape-graph cliques, or the ORR baseline over raw points.
 
-A cloud passes the stages in order, each in its own subpackage:
-- verification: the cloud as a depth buffer seen from its sensor, with its supporting plane
-  (:class:`~psorr.verification.scene_view.SceneView`), which every later check reads;
-- decomposition (PSORR): what stands on the table, with a band of it, into planes and cylinders and
-  their shape graph, its leftovers again finer (:mod:`psorr.decomposition`);
-- hypotheses: PSORR pairs plane centroids and cylinder axes, clusters the poses by vote and screens
-  them by intersecting model and scene primitive boxes (section 2.1.4); once detections explain some
-  parts, it pairs again among the primitives they leave unexplained, then tries single faces and long
-  cylinders. ORR (Papazov and Burschka) pairs random oriented points and point-checks every pose;
-- acceptance: ICP, the point-level check, and suppression of detections that explain the same pixels.
-PSORR then gives what still stands on the table unexplained, in part-sized groups, a second look:
-decomposed at a finer voxel and searched the same way.
+A cloud passes the stages in order, each in its own subpackage (docs/pipeline/index.md): the scene as a depth
+buffer with its supporting plane (verification); parts at rest tried first, which alone may explain all that
+stands (hypotheses.outline, acceptance.by_patch); what stands on the table decomposed into planes, cylinders and
+their shape graph (decomposition); pairs or cliques, clustered by vote and screened by intersecting primitive
+boxes (hypotheses, the paper's section 2.1.4); ICP, the point-level check and pixel claims (acceptance); then
+pairs again among the primitives left unexplained, single faces, long cylinders, the resting poses, and a
+finer second look at what still stands unexplained. ORR (Papazov and Burschka) pairs random oriented points.
 """
 
 from __future__ import annotations
@@ -23,6 +18,7 @@ from dataclasses import replace
 import numpy as np
 
 from psorr.acceptance.accept import Acceptance
+from psorr.acceptance.by_patch import every_patch_found
 from psorr.acceptance.claims import PixelClaims, SearchResult, SearchTally
 from psorr.acceptance.known import known_candidates
 from psorr.acceptance.unexplained import DetectedSurfaces
@@ -184,8 +180,9 @@ class Recognizer:
 
     def _decomposed_search(self, cloud: PointCloud, view: SceneView, rng: np.random.Generator,
                            tally: SearchTally) -> SearchResult:
-        """PSORR and PSG: what stands on the table decomposed and searched (_search), parts by their
-        outline, and what no detection explains decomposed finer and searched again."""
+        """PSORR and PSG: parts at rest tried first (:func:`~psorr.acceptance.by_patch.every_patch_found`); when
+        they do not explain all that stands, what stands on the table decomposed and searched (_search), parts
+        by their outline, and what no detection explains decomposed finer and searched again."""
         p = self.params
         t0 = time.perf_counter()
         # Only what stands on the table is decomposed, with a band of table around it that keeps the
@@ -196,16 +193,24 @@ class Recognizer:
                                     margin)
         if cropped is None:  # the known parts explain all that stands
             return tally.result()
+        tally.decomposition_ms += (time.perf_counter() - t0) * 1e3
+        rests = self.outline.candidates(cropped if followed else cloud, view) if self.outline else None
+        if rests is not None and not followed:  # parts at rest may explain all that stands (decision 0066)
+            trial = self._new_tally(view)
+            trial.add(rests.hypotheses, rests.verify_ms)
+            trial.decomposition_ms = tally.decomposition_ms
+            if every_patch_found(self.acceptance, view, rests, trial.claims) and self._unexplained(
+                    cropped, view, trial, margin) is None:
+                return trial.result()
+        t0 = time.perf_counter()
         scene = decompose_with_leftovers(cropped, self.scene_decompose, p.detail.leftover_voxel, rng)
         tally.decomposition_ms += (time.perf_counter() - t0) * 1e3
         current_observer().decomposition("scene", cloud, scene)
         if scene is None:  # too sparse to decompose: nothing to find (as ORR says)
             return tally.result()
         self._search(cloud, view, scene, tally)
-        if self.outline is not None:  # parts too small to pair, and pairs' wrong poses, by how parts rest
-            outlined = cropped if followed else cloud
-            rests = apart_from(self.outline.candidates(outlined, view), tally.detections, self.library)
-            self._single_search(view, tally, rests, fine_starts=True)
+        if rests is not None:  # parts too small to pair, and pairs' wrong poses, by how parts rest
+            self._single_search(view, tally, apart_from(rests, tally.detections, self.library), fine_starts=True)
         if p.detail.fine_voxel is not None:
             self._second_look(cloud, cropped, view, tally, rng)
         return tally.result()

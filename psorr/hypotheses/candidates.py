@@ -12,11 +12,13 @@ class Candidate:
     """One screened pose hypothesis: the library's ``model`` (an index into ``ModelLibrary.models``) at
     ``T_cloud_model`` (4, 4), mapping model coordinates (metres) into the cloud's frame, and the score its
     screening gave it (the bounding-box fitness of pairs and cliques, the coarse point check's of single
-    primitives), or None when its source scores none."""
+    primitives), or None when its source scores none; ``region``: the patch of points standing on the table it
+    was made for (the outline's, numbered per scene), or None."""
 
     model: int
     T_cloud_model: np.ndarray
     score: float | None = None
+    region: int | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -27,6 +29,7 @@ class CandidateSet:
     candidates: tuple[Candidate, ...] = ()
     hypotheses: int = 0
     verify_ms: float = 0.0
+    regions: int = 0  # the patches standing on the table it searched (the outline's), with a candidate or not
 
     def __len__(self) -> int:
         return len(self.candidates)

@@ -162,11 +162,11 @@ class OutlineMatcher:
         T_cloud_table = table_frame(plane)
         per_patch = [self._patch_poses(patch) for patch in self._patches(cloud, plane, T_cloud_table)]
         # The patches in turn, each's best first, so that one patch's many near-fits cannot crowd out another's.
-        order = sorted(((rank, cost, model, T) for poses in per_patch for rank, (cost, model, T) in enumerate(poses)),
-                       key=lambda pose: pose[:2])
+        order = sorted(((rank, cost, model, T, k) for k, poses in enumerate(per_patch)
+                        for rank, (cost, model, T) in enumerate(poses)), key=lambda pose: pose[:2])
         chosen = order[:self.params.max_candidates]
-        return CandidateSet(tuple(Candidate(m, T_cloud_table @ T) for _, _, m, T in chosen),
-                            sum(len(p) for p in per_patch), (time.perf_counter() - start) * 1e3)
+        return CandidateSet(tuple(Candidate(m, T_cloud_table @ T, region=k) for _, _, m, T, k in chosen),
+                            sum(len(p) for p in per_patch), (time.perf_counter() - start) * 1e3, len(per_patch))
 
     def _patches(self, cloud: PointCloud, plane: np.ndarray, T_cloud_table: np.ndarray):
         """Each connected patch of points standing on the table (see OutlineParams)."""

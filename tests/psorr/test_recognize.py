@@ -288,3 +288,41 @@ def test_the_same_cloud_gives_the_same_poses_to_the_last_bit(library, catalog):
         assert [d.model for d in other] == [d.model for d in runs[0]]
         for a, b in zip(runs[0], other):
             assert np.array_equal(a.T_cloud_model, b.T_cloud_model)
+
+
+def _counting_decompositions(monkeypatch) -> list:
+    """Each call of the scene decomposition recognize() makes, recorded (as its cropped cloud's size)."""
+    import psorr.recognize as recognize
+
+    calls, decompose = [], recognize.decompose_with_leftovers
+
+    def counted(cloud, *args, **kwargs):
+        calls.append(int(cloud.valid_mask.sum()))
+        return decompose(cloud, *args, **kwargs)
+
+    monkeypatch.setattr(recognize, "decompose_with_leftovers", counted)
+    return calls
+
+
+def test_a_lone_part_at_rest_is_found_without_decomposing_the_scene(library, catalog, monkeypatch):
+    # Its resting pose explains every point standing on the table, with no twin pose left open: the pairs
+    # would have nothing left to look at.
+    names = sorted(catalog)
+    calls = _counting_decompositions(monkeypatch)
+    for name in ("bushing", "pipe_tee", "transformer"):
+        scene = workpiece_scene(np.random.default_rng(2000 + 10 * names.index(name)), {name: catalog[name].load_mesh()},
+                                [name])
+        detections = Recognizer(library).recognize(scene.cloud).detections
+        assert _score(scene, detections, library, catalog) == (1, 0)
+    assert calls == []
+
+
+def test_what_no_part_at_rest_explains_is_decomposed_and_paired(library, catalog, monkeypatch):
+    # The occluded clutter scene of seed 1003: the resting poses do not explain every standing point, so the
+    # scene is decomposed and paired as a whole, and all four parts are found.
+    calls = _counting_decompositions(monkeypatch)
+    scene = _occluded_clutter(catalog, 3)
+    detections = Recognizer(library).recognize(scene.cloud).detections
+    assert calls
+    found, false = _score(scene, detections, library, catalog)
+    assert found == len(scene.instances) and false == 0
