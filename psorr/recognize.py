@@ -196,9 +196,8 @@ class Recognizer:
         tally.decomposition_ms += (time.perf_counter() - t0) * 1e3
         rests = self.outline.candidates(cropped if followed else cloud, view) if self.outline else None
         if rests is not None and not followed:  # parts at rest may explain all that stands (decision 0066)
-            trial = self._new_tally(view)
+            trial = replace(tally, claims=self._new_tally(view).claims)  # the counts so far, claims of its own
             trial.add(rests.hypotheses, rests.verify_ms)
-            trial.decomposition_ms = tally.decomposition_ms
             if every_patch_found(self.acceptance, view, rests, trial.claims) and self._unexplained(
                     cropped, view, trial, margin) is None:
                 return trial.result()
