@@ -87,27 +87,36 @@ def pixel_window(view: SceneView, centre: np.ndarray, radius: float) -> tuple[np
 
 
 def residual_costs(view: SceneView, renderer: DepthRenderer, poses: np.ndarray, centre: np.ndarray,
-                   radius: float, discriminative: bool = True,
-                   twins: list[tuple[int, int]] | None = None) -> np.ndarray:
+                   radius: float, discriminative: bool = True) -> np.ndarray:
     """(K,) cost of each pose (K, 4, 4): the summed squared depth residual, in Kinect sigmas and
     capped at ``RESIDUAL_CAP``, of the rendered model (with the supporting plane behind it) against
     the measured depth, over the pixels around the sphere (``centre``, ``radius``).
 
     With ``discriminative``, only pixels where some pose renders differently from the first count:
-    the rest add the same amount to every pose, and their noise would drown a small feature. With
-    ``twins``, pairs (a, b) of indices into ``poses``, only pixels where some pose a renders differently
-    from its twin b count instead.
+    the rest add the same amount to every pose, and their noise would drown a small feature.
     """
     window = _window_costs(view, centre, radius, lambda rays: renderer.depth(poses, rays))
     if window is None:
         return np.zeros(len(poses))
     cost, rendered, sigma = window
-    if twins is not None:
-        a, b = np.array(twins).T
-        cost = cost[:, differs(rendered[a], rendered[b], sigma).any(axis=0)]
-    elif discriminative:
+    if discriminative:
         cost = cost[:, differs(rendered, rendered[:1], sigma).any(axis=0)]
     return cost.sum(axis=1)
+
+
+def twin_costs(view: SceneView, renderer: DepthRenderer, poses: np.ndarray, twins: list[tuple[int, int]],
+               centre: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray]:
+    """(K,) cost of each pose (K, 4, 4), as :func:`residual_costs`, over the pixels around the sphere where
+    some pose a of the ``twins`` pairs (a, b) of indices into ``poses`` renders differently from its twin b;
+    and (len(twins),) how many pixels each pair tells apart (none: the features that tell those twins
+    apart do not show in this view)."""
+    window = _window_costs(view, centre, radius, lambda rays: renderer.depth(poses, rays))
+    if window is None:
+        return np.zeros(len(poses)), np.zeros(len(twins), dtype=int)
+    cost, rendered, sigma = window
+    a, b = np.array(twins).T
+    telling = differs(rendered[a], rendered[b], sigma)
+    return cost[:, telling.any(axis=0)].sum(axis=1), telling.sum(axis=1)
 
 
 def rival_costs(view: SceneView, rivals: list[tuple[DepthRenderer, np.ndarray]], centre: np.ndarray,
