@@ -105,8 +105,8 @@ class NearSymmetryResolver:
     def fit_surface(self, view: SceneView, T_cloud_model: np.ndarray, reach: float) -> np.ndarray:
         """The pose (4, 4) near ``T_cloud_model`` that fits the model's surface to the measured depth
         (:func:`refine_projective`), over the pixels within ``reach`` m of the model's bounding sphere."""
-        centre = T_cloud_model[:3, :3] @ self._centre + T_cloud_model[:3, 3]
-        return refine_projective(view, self.renderer, T_cloud_model, centre, 0.5 * self.model.diameter + reach)
+        return refine_projective(view, self.renderer, T_cloud_model, self._centre_of(T_cloud_model),
+                                 0.5 * self.model.diameter + reach)
 
     def _costs(self, view: SceneView, poses: np.ndarray, discriminative: bool = True) -> np.ndarray:
         return residual_costs(view, self.renderer, poses, self._centre_of(poses[0]), 0.5 * self.model.diameter,
@@ -187,7 +187,10 @@ class NearSymmetryResolver:
             # Where the pose found and its own twin render alike, the view does not show the features:
             # the poses tie, whatever the turned pose, refitted a millimetre away, renders differently
             # from its twin over a few pixels at the bar (a hole shallower than it, decision 0067).
-            ratios[k] = 1.0 if not telling[0] else costs[1] / costs[0] if costs[0] > 0 else np.inf
+            if not telling[0]:
+                ratios[k] = 1.0
+            elif costs[0] > 0:
+                ratios[k] = costs[1] / costs[0]
         if (~exact).any():
             costs = self._costs(view, np.concatenate([T[None], turned[~exact]]))
             ratios[~exact] = costs[1:] / costs[0] if costs[0] > 0 else np.inf
