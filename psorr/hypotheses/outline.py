@@ -23,6 +23,7 @@ from scipy import ndimage
 from psorr.checks import params as check
 from psorr.geometry.boxes import orthonormal_frame
 from psorr.geometry.distance_field import DistanceField
+from psorr.geometry.grid_morphology import closing, opening
 from psorr.hypotheses.candidates import Candidate, CandidateSet
 from psorr.sensing.kinect_noise import KINECT_V1
 from psorr.types import PointCloud
@@ -124,6 +125,17 @@ def _square(centre: np.ndarray, span: np.ndarray) -> np.ndarray:
     return centre + np.stack(np.meshgrid(span, span, [0.0], indexing="ij"), -1).reshape(-1, 3)
 
 
+def _flat_cells(points: np.ndarray, T_table_cloud: np.ndarray, low: np.ndarray, cell: float,
+                shape: tuple) -> tuple[np.ndarray, np.ndarray]:
+    """The flat index (N,) into a grid of ``shape`` cells of ``cell`` from ``low`` (2,) on the table of each of
+    ``points`` (N, 3), and (N,) whether it falls on the grid (the index of one that does not is meaningless)."""
+    # Column by column: (N, 2) arrays and their reductions over axis 1 took twice as long on 300,000 points.
+    rows = np.floor((points @ T_table_cloud[0, :3] + T_table_cloud[0, 3] - low[0]) / cell).astype(np.int64)
+    cols = np.floor((points @ T_table_cloud[1, :3] + T_table_cloud[1, 3] - low[1]) / cell).astype(np.int64)
+    inside = (rows >= 0) & (rows < shape[0]) & (cols >= 0) & (cols < shape[1])
+    return rows * shape[1] + cols, inside
+
+
 def _subset(points: np.ndarray, count: int) -> np.ndarray:
     """At most ``count`` of ``points``, evenly through them (no draw: the same patch gives the same poses)."""
     return points[np.linspace(0, len(points) - 1, min(count, len(points))).astype(np.int64)]
@@ -173,7 +185,9 @@ class OutlineMatcher:
         p = self.params
         points = cloud.points[cloud.valid_mask]
         height = points @ plane[:3] + plane[3]
-        standing = height > np.maximum(p.min_height, p.sigmas * KINECT_V1.depth_sigma(points[:, 2]))
+        # The sensor's sigma only where the floor is cleared: a tenth of the points on a noisy table.
+        standing = height > p.min_height
+        standing[standing] = height[standing] > p.sigmas * KINECT_V1.depth_sigma(points[standing, 2])
         # Higher than any resting model reaches, a point is something else's (an arm reaching in): it neither
         # joins a patch nor counts among its cells' points, or a part under the arm would join the arm's patch.
         # The tolerance is looked up only for the few points above the tallest rest, not the whole image.
@@ -184,17 +198,15 @@ class OutlineMatcher:
         if standing.sum() < 3:
             return
         T_table_cloud = np.linalg.inv(T_cloud_table)
-        xy = points @ T_table_cloud[:2, :3].T + T_table_cloud[:2, 3]
         up = points[standing] @ T_table_cloud[:3, :3].T + T_table_cloud[:3, 3]
         low = up[:, :2].min(axis=0) - p.cell
         shape = tuple(np.floor((up[:, :2].max(axis=0) + p.cell - low) / p.cell).astype(np.int64) + 1)
-        cells = np.floor((xy - low) / p.cell).astype(np.int64)
-        inside = ((cells >= 0) & (cells < shape)).all(axis=1) & ~beyond
-        every = np.bincount(np.ravel_multi_index(tuple(cells[inside].T), shape), minlength=np.prod(shape))
-        raised = np.bincount(np.ravel_multi_index(tuple(cells[standing].T), shape), minlength=np.prod(shape))
-        labels, count = ndimage.label(ndimage.binary_opening(ndimage.binary_closing(raised.reshape(shape) > 0,
-                                                                                    iterations=2)))
-        owner = labels[tuple(cells[standing].T)]
+        where, inside = _flat_cells(points, T_table_cloud, low, p.cell, shape)
+        inside &= ~beyond
+        every = np.bincount(where[inside], minlength=np.prod(shape))
+        raised = np.bincount(where[standing], minlength=np.prod(shape))
+        labels, count = ndimage.label(opening(closing(raised.reshape(shape) > 0, iterations=2)))
+        owner = labels.ravel()[where[standing]]
         depth = points[standing, 2]
         # Per label at once: the table's noise raises hundreds of specks, each a pass over the grid otherwise.
         flat = labels.ravel()
