@@ -184,23 +184,25 @@ class Recognizer:
         they do not explain all that stands, what stands on the table decomposed and searched (_search), parts
         by their outline, and what no detection explains decomposed finer and searched again."""
         p = self.params
+        followed = bool(tally.detections)  # known parts followed: the search looks only at what they leave
+        rests = None
+        if self.outline is not None and not followed:  # parts at rest may explain all that stands (decision 0066)
+            rests = self.outline.candidates(cloud, view)
+            trial = replace(tally, claims=self._new_tally(view).claims)  # the counts so far, claims of its own
+            trial.add(rests.hypotheses, rests.verify_ms)
+            if every_patch_found(self.acceptance, view, rests, trial.claims) and self._explained(cloud, view, trial):
+                return trial.result()
         t0 = time.perf_counter()
         # Only what stands on the table is decomposed, with a band of table around it that keeps the
         # table larger than any model, so it still is not paired as a part's face.
         margin = _TABLE_EXTENT / 2 * self.max_diameter
-        followed = bool(tally.detections)  # known parts followed: the search looks only at what they leave
         cropped = self._unexplained(crop_to_parts(cloud, view.support_plane, margin, p.support_crop), view, tally,
                                     margin)
         if cropped is None:  # the known parts explain all that stands
             return tally.result()
         tally.decomposition_ms += (time.perf_counter() - t0) * 1e3
-        rests = self.outline.candidates(cropped if followed else cloud, view) if self.outline else None
-        if rests is not None and not followed:  # parts at rest may explain all that stands (decision 0066)
-            trial = replace(tally, claims=self._new_tally(view).claims)  # the counts so far, claims of its own
-            trial.add(rests.hypotheses, rests.verify_ms)
-            if every_patch_found(self.acceptance, view, rests, trial.claims) and self._unexplained(
-                    cropped, view, trial, margin) is None:
-                return trial.result()
+        if self.outline is not None and followed:
+            rests = self.outline.candidates(cropped, view)
         t0 = time.perf_counter()
         scene = decompose_with_leftovers(cropped, self.scene_decompose, p.detail.leftover_voxel, rng)
         tally.decomposition_ms += (time.perf_counter() - t0) * 1e3
@@ -213,6 +215,13 @@ class Recognizer:
         if p.detail.fine_voxel is not None:
             self._second_look(cloud, cropped, view, tally, rng)
         return tally.result()
+
+    def _explained(self, cloud: PointCloud, view: SceneView, tally: SearchTally) -> bool:
+        """Do ``tally``'s detections explain all that stands on the table in ``cloud``? What stands is the same
+        in the cloud as in its crop (:func:`crop_to_parts` keeps every standing point), so none is cropped."""
+        p = self.params
+        return self.detected.unexplained(cloud, view.support_plane, tally.detections, p.support_crop.off_plane,
+                                         _TABLE_EXTENT * self.max_diameter, p.detail.min_unexplained) is None
 
     def _unexplained(self, cropped: PointCloud, view: SceneView, tally: SearchTally,
                      margin: float) -> PointCloud | None:
