@@ -81,7 +81,8 @@ class Recognizer:
         # still converged.
         coarse_limit = 2 * p.acceptance.max_violation_ratio if self.method is Method.PSORR else 1.0
         self.acceptance = Acceptance(library, p.acceptance, coarse_limit)
-        self.detected = DetectedSurfaces(library.models, p.acceptance.icp_distance / 2)
+        self.detected = DetectedSurfaces(library.models, p.acceptance.icp_distance / 2, p.support_crop.off_plane,
+                                         _TABLE_EXTENT * self.max_diameter, p.detail.min_unexplained)
         self.pairs = PairCandidates(library, p.pairs)
         self.single_plane = SinglePlaneMatcher(library.models, p.single_plane)
         self.single_cylinder = SingleCylinderMatcher(library.models, p.single_cylinder)
@@ -190,7 +191,8 @@ class Recognizer:
             rests = self.outline.candidates(cloud, view)
             trial = replace(tally, claims=self._new_tally(view).claims)  # the counts so far, claims of its own
             trial.add(rests.hypotheses, rests.verify_ms)
-            if every_patch_found(self.acceptance, view, rests, trial.claims) and self._explained(cloud, view, trial):
+            if every_patch_found(self.acceptance, view, rests, trial.claims) and self.detected.unexplained(
+                    cloud, view.support_plane, trial.detections) is None:  # the cloud: what stands is its crop's
                 return trial.result()
         t0 = time.perf_counter()
         # Only what stands on the table is decomposed, with a band of table around it that keeps the
@@ -216,31 +218,21 @@ class Recognizer:
             self._second_look(cloud, cropped, view, tally, rng)
         return tally.result()
 
-    def _explained(self, cloud: PointCloud, view: SceneView, tally: SearchTally) -> bool:
-        """Do ``tally``'s detections explain all that stands on the table in ``cloud``? What stands is the same
-        in the cloud as in its crop (:func:`crop_to_parts` keeps every standing point), so none is cropped."""
-        p = self.params
-        return self.detected.unexplained(cloud, view.support_plane, tally.detections, p.support_crop.off_plane,
-                                         _TABLE_EXTENT * self.max_diameter, p.detail.min_unexplained) is None
-
     def _unexplained(self, cropped: PointCloud, view: SceneView, tally: SearchTally,
                      margin: float) -> PointCloud | None:
         """``cropped`` less the standing points the known parts followed so far explain, with its table band
         around what is left (as it is when there are none); None when too few stand unexplained to be a part."""
         if not tally.detections:
             return cropped
-        p = self.params
-        left = self.detected.unexplained(cropped, view.support_plane, tally.detections, p.support_crop.off_plane,
-                                         _TABLE_EXTENT * self.max_diameter, p.detail.min_unexplained)
-        return None if left is None else crop_to_parts(left, view.support_plane, margin, p.support_crop)
+        left = self.detected.unexplained(cropped, view.support_plane, tally.detections)
+        return None if left is None else crop_to_parts(left, view.support_plane, margin, self.params.support_crop)
 
     def _second_look(self, cloud, cropped, view, tally: SearchTally, rng) -> None:
         """What stands on the table and no detection explains, decomposed finer and searched again, with a
         narrow band of the table: the table is then the plane at the band's rim, not the one too large to be
         a part's face (docs/decisions/0064-the-second-looks-band.md)."""
         p = self.params
-        left = self.detected.unexplained(cropped, view.support_plane, tally.detections, p.support_crop.off_plane,
-                                         _TABLE_EXTENT * self.max_diameter, p.detail.min_unexplained)
+        left = self.detected.unexplained(cropped, view.support_plane, tally.detections)
         if left is None:
             return
         t0 = time.perf_counter()

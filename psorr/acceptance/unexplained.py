@@ -20,11 +20,14 @@ from psorr.types import PointCloud
 
 class DetectedSurfaces:
     """The library's models' surface samples (``models``: those of a ModelLibrary), for asking which points
-    the detections so far explain: those within ``reach`` metres of a detected model's samples at its pose."""
+    the detections so far explain: those within ``reach`` metres of a detected model's samples at its pose.
+    A point stands when it is more than ``off_plane`` metres above the supporting plane; a group of standing
+    points wider or higher than ``largest`` metres is no part, and fewer than ``min_points`` left standing
+    are none."""
 
-    def __init__(self, models, reach: float):
+    def __init__(self, models, reach: float, off_plane: float, largest: float, min_points: int):
         self.trees = {m.name: cKDTree(m.points) for m in models}
-        self.reach = reach
+        self.reach, self.off_plane, self.largest, self.min_points = reach, off_plane, largest, min_points
 
     def explain(self, detections, points: np.ndarray, share: float = 0.5) -> bool:
         """Does at least ``share`` of ``points`` (M, 3), a primitive's, lie on the surface of one of
@@ -33,15 +36,15 @@ class DetectedSurfaces:
         points = points[:: max(1, len(points) // 200)]
         return any(on_detected_surface(points, d, self.trees, self.reach).mean() >= share for d in detections)
 
-    def unexplained(self, cloud: PointCloud, plane: np.ndarray | None, detections, off_plane: float,
-                    largest: float, min_points: int) -> PointCloud | None:
+    def unexplained(self, cloud: PointCloud, plane: np.ndarray | None, detections) -> PointCloud | None:
         """``cloud`` with the points standing on the supporting ``plane`` blanked where ``detections`` explain
-        them, or where they form groups too large to be one part (:func:`part_sized`, ``largest`` metres);
-        None when fewer than ``min_points`` stand unexplained."""
-        standing = standing_points(cloud, plane, off_plane)
+        them, or where they form groups too large to be one part (:func:`part_sized`); None when too few stand
+        unexplained. What stands is the same in a cloud as in its crop (the crop keeps every standing point),
+        so the answer is too."""
+        standing = standing_points(cloud, plane, self.off_plane)
         rest = standing_unexplained(cloud, standing, detections, self.trees, self.reach)
-        rest = part_sized(cloud, plane, rest, largest)
-        if rest.sum() < min_points:
+        rest = part_sized(cloud, plane, rest, self.largest)
+        if rest.sum() < self.min_points:
             return None
         return blanked(cloud, standing & ~rest)
 
