@@ -3,8 +3,8 @@ from its results, as markdown tables. The docs site renders the same tables from
 benchmarks/results/generalization.json (docs/hooks/generalization_tables.py), so they are written once.
 
 Recall in clutter and occlusion counts the instances at least VISIBLE seen (their visibility: the share
-of what the camera would see of them alone that it sees past the other objects); the per-size,
-per-class and per-part tables count such instances of every scene kind."""
+of what the sensor would see of them alone that it sees past the other objects and their projector
+shadow); the per-size, per-class and per-part tables count such instances of every scene kind."""
 
 from __future__ import annotations
 

@@ -93,8 +93,9 @@ class MeshScene(WorkpieceScene):
         kind: the scene's kind.
         distractors: the objects not in the library (names and poses); distractors[j] has the label
             DISTRACTOR_LABEL + j.
-        visibility: per instance, the share of its surface samples that the camera would see were it alone
-            on the table which it does see past the other objects (no sensor noise): 1 unoccluded.
+        visibility: per instance, the share of its surface samples that the sensor would see were it alone
+            on the table which it does see past the other objects and out of their projector shadow (no
+            other sensor noise): 1 unoccluded.
         seen_share: per instance, the share of all its surface samples that the sensor measured.
     """
 
@@ -209,8 +210,10 @@ def mesh_scene(rng: np.random.Generator, parts: dict[str, trimesh.Trimesh], kind
         ids = np.where(depth > 0, clean_ids.ravel()[source], -1)
     T_camera_world = np.linalg.inv(T_world_camera)
     placed = [PlacedWorkpiece(n, T_camera_world @ T) for n, T in zip(names + others, poses)]
+    baseline = p.noise.baseline if p.noise is not None and p.noise.shadow else None
     views = [instance_visibility(parts[inst.name], inst.T_camera_model, k + 1, clean_depth, clean_ids, ids,
-                                 p.intrinsics, p.visibility_samples) for k, inst in enumerate(placed[:len(names)])]
+                                 p.intrinsics, p.visibility_samples, baseline)
+             for k, inst in enumerate(placed[:len(names)])]
     return MeshScene(depth_to_cloud(depth, p.intrinsics, labels=ids), tuple(placed[:len(names)]), T_world_camera,
                      p.intrinsics, kind, tuple(placed[len(names):]), tuple(v[0] for v in views),
                      tuple(v[1] for v in views))
