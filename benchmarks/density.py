@@ -43,23 +43,50 @@ RESOLUTIONS = {0.3: (640, 480), 1: (1280, 960), 3: (2048, 1536), 10: (3648, 2736
 TARGET_3M_MS = 1000.0
 
 
+TILT = np.radians(20.0)
+# Table frame to camera frame: the plane's normal turned to face the camera at the origin, which looks along +z,
+# and tilted by TILT; the table's centre 1 m in front of the camera.
+R_CAMERA_TABLE = np.array([[1, 0, 0], [0, np.cos(TILT), -np.sin(TILT)], [0, np.sin(TILT), np.cos(TILT)]]) @ np.diag(
+    [1.0, -1.0, -1.0])
+T_CAMERA_TABLE = np.array([0.0, 0.0, 1.0])
+CAMERA_IN_TABLE = R_CAMERA_TABLE.T @ -T_CAMERA_TABLE  # (0, 0.34, 0.94): above the table, towards +y
+BOX_SIDE = 0.2
+# Off the camera's axis along +x, so that besides its top the box shows the camera its -x side and its +y side.
+BOX_LOW = np.array([0.1, -0.1, 0.0])
+BOX_HIGH = BOX_LOW + BOX_SIDE
+
+
+def _hidden_by_box(points: np.ndarray) -> np.ndarray:
+    """(N,) bool: table-frame points whose ray from the camera passes through the box first (slab test)."""
+    ray = points - CAMERA_IN_TABLE
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t_low, t_high = (BOX_LOW - CAMERA_IN_TABLE) / ray, (BOX_HIGH - CAMERA_IN_TABLE) / ray
+    enter = np.nanmax(np.minimum(t_low, t_high), axis=1)
+    leave = np.nanmin(np.maximum(t_low, t_high), axis=1)
+    return (enter < leave) & (enter < 1.0 - 1e-9) & (leave > 0.0)
+
+
+def _box_faces(m: int, rng: np.random.Generator) -> np.ndarray:
+    """(m, 3) table-frame points spread evenly over the box's three faces the camera sees."""
+    a = rng.uniform(0.0, BOX_SIDE, (m, 2))
+    face = rng.integers(0, 3, m)[:, None]
+    top = BOX_LOW + np.column_stack([a, np.full(m, BOX_SIDE)])
+    side_x = BOX_LOW + np.column_stack([np.zeros(m), a])
+    side_y = BOX_LOW + np.column_stack([a[:, 0], np.full(m, BOX_SIDE), a[:, 1]])
+    return np.where(face == 0, top, np.where(face == 1, side_x, side_y))
+
+
 def tilted_table(n: int, rng: np.random.Generator, box: bool) -> np.ndarray:
-    """(n, 3) points of a 1 m square plane tilted 20 degrees towards a camera 1 m away, optionally with
-    15 % of the points on a 0.2 m box standing on it (top and the two sides facing the camera)."""
+    """(n, 3) points of a 1 m square plane tilted 20 degrees towards a camera 1 m away, with 2 mm noise,
+    optionally with 15 % of the points on a 0.2 m box standing on it: only what the camera could see, the
+    box's top and the two sides that face the camera, and the table less what the box hides."""
     on_box = int(0.15 * n) if box else 0
-    uv = rng.uniform(-0.5, 0.5, (n - on_box, 2))
-    parts = [np.column_stack([uv, np.zeros(len(uv))])]
-    if on_box:
-        a = rng.uniform(-0.1, 0.1, (on_box, 2))
-        face = rng.integers(0, 3, on_box)[:, None]
-        top = np.column_stack([a, np.full(on_box, 0.2)])
-        side_x = np.column_stack([np.full(on_box, -0.1), a[:, 0], a[:, 1] + 0.1])
-        side_y = np.column_stack([a[:, 0], np.full(on_box, -0.1), a[:, 1] + 0.1])
-        parts.append(np.where(face == 0, top, np.where(face == 1, side_x, side_y)))
-    tilt = np.radians(20.0)
-    R = np.array([[1, 0, 0], [0, np.cos(tilt), -np.sin(tilt)], [0, np.sin(tilt), np.cos(tilt)]])
-    # The plane's normal turned to face the camera at the origin, which looks along +z.
-    points = np.vstack(parts) @ np.diag([1.0, -1.0, -1.0]) @ R.T + (0.0, 0.0, 1.0)
+    table = np.empty((0, 3))
+    while len(table) < n - on_box:  # the box hides a little of the table: draw until enough are seen
+        uv = rng.uniform(-0.5, 0.5, (n - on_box, 2))
+        drawn = np.column_stack([uv, np.zeros(len(uv))])
+        table = np.vstack([table, drawn[~_hidden_by_box(drawn)] if box else drawn])
+    points = np.vstack([table[:n - on_box], _box_faces(on_box, rng)]) @ R_CAMERA_TABLE.T + T_CAMERA_TABLE
     return points + rng.normal(0.0, 0.002, points.shape)
 
 
