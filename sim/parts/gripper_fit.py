@@ -4,8 +4,8 @@ the measurements :mod:`sim.parts.grasp_synthesis` searches and ranks with.
 
 A frame is a gripper placement from above: the tool point (metres, model frame; the pads' centres are level
 with it) and the horizontal unit closing direction. Coordinates relative to a frame are ``u`` along closing,
-``v`` across it and ``w`` up, in metres. Everything is measured for many frames at once, in chunks of frames
-whose (frames x samples) arrays stay near ``_CHUNK`` elements.
+``v`` across it and ``w`` up, in metres. Every frame is measured against every sample by the compiled walks
+of :mod:`sim.parts.pads_kernel`.
 """
 
 from __future__ import annotations
@@ -17,10 +17,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 import trimesh
 
+from sim.parts.pads_kernel import ahead as ahead_kernel
+from sim.parts.pads_kernel import collides, pads_meet
+
 if TYPE_CHECKING:
     from sim.parts.grasp_synthesis import GraspSynthesisParams
-
-_CHUNK = 250_000  # (frame, sample) pairs a step: bounded memory for any part; 1e5 to 3e6 ran equally fast
 
 
 @dataclass(frozen=True)
@@ -84,14 +85,12 @@ def measure(surface: Surface, frames: Frames, params: GraspSynthesisParams, min_
     ``min_area`` m^2 of contact a side (None: for none), whether the gripper hits the part on the way.
     ``centred``: the tool goes midway between the stops (a planned grasp), else to the frame's origin (a
     grasp planned on a wrong pose: the mirrored fingers then push the part between them)."""
-    lo, hi, areas, contact = _in_chunks(surface, frames, lambda chunk: _pads_meet(surface, chunk, params))
+    lo, hi, areas, contact = _pads_meet(surface, frames, params)
     collides = np.zeros(len(lo), bool)
     if min_area is not None:
         test = np.isfinite(lo) & (hi - lo <= params.widest) & (areas.min(1) >= min_area)
         middle = (lo[test] + hi[test]) / 2 if centred else np.zeros(int(test.sum()), lo.dtype)
-        (collides[test],) = _in_chunks(
-            surface, frames.take(test), lambda chunk, a, b, m: (_collides(surface, chunk, a, b, m, params),),
-            lo[test] - middle, hi[test] - middle, middle)
+        collides[test] = _collides(surface, frames.take(test), lo[test] - middle, hi[test] - middle, middle, params)
     return Fit(lo, hi, areas, contact, collides)
 
 
@@ -103,21 +102,9 @@ def ahead(surface: Surface, seeds: Frames, params: GraspSynthesisParams) -> tupl
     flange the feature stands on)."""
     tube, tol = 1.5 * math.sqrt(surface.area_each), params.contact_tolerance
     reach = params.max_opening / 2 + params.finger_offset[0] + params.finger_half_size[0] + params.clearance
-    lane, z = params.finger_half_size[1] + params.clearance, surface.points[:, 2]
-
-    def chunk_ahead(chunk: Frames) -> tuple:
-        u, v = coordinate(surface, chunk, chunk.closing), coordinate(surface, chunk, chunk.across)
-        f, s = np.nonzero((np.abs(v) <= tube) & (np.abs(z - chunk.origins[:, 2, None]) <= tube) & (u > tol))
-        leaving = (chunk.closing[f] * surface.normals[s, :2]).sum(1) >= params.cos_cone
-        span = np.full(len(chunk.origins), np.inf, np.float32)
-        np.minimum.at(span, f[leaving], u[f[leaving], s[leaving]])
-        d = span[:, None]
-        beside = (np.abs(v) <= lane) & ((u < -tol) | (u > d + tol)) & (np.abs(u - d / 2) <= reach) \
-            & (z < chunk.origins[:, 2, None])
-        return span, np.where(beside, z, 0.0).max(1)
-
-    span, floor = _in_chunks(surface, seeds, chunk_ahead)
-    return span, floor
+    lane = params.finger_half_size[1] + params.clearance
+    return ahead_kernel(surface.points, surface.normals, seeds.origins, seeds.closing, *_offsets(seeds),
+                        *np.float32([tube, tol, lane, reach]), params.cos_cone, tube)
 
 
 def perturbed_share(surface: Surface, frames: Frames, rng: np.random.Generator,
@@ -163,49 +150,28 @@ def distinct(frames: Frames, params: GraspSynthesisParams) -> list[int]:
     return kept
 
 
-def coordinate(surface: Surface, frames: Frames, direction: np.ndarray) -> np.ndarray:
-    """(F, N) float32 m from each frame's tool point to each sample along the horizontal ``direction`` (F, 2)."""
-    offset = (frames.origins[:, 0] * direction[:, 0] + frames.origins[:, 1] * direction[:, 1]).astype(np.float32)
-    direction = direction.astype(np.float32)
-    return np.outer(direction[:, 0], surface.points[:, 0]) + np.outer(direction[:, 1], surface.points[:, 1]) \
-        - offset[:, None]
-
-
-def _in_chunks(surface: Surface, frames: Frames, measure_chunk, *columns: np.ndarray) -> list[np.ndarray]:
-    """``measure_chunk(frames, *columns)``, a tuple of per-frame arrays, over chunks of the frames (and of the
-    (F,) ``columns``), concatenated."""
-    step = max(1, _CHUNK // len(surface.points))
-    chunks = [measure_chunk(frames.take(slice(i, i + step)), *(column[i : i + step] for column in columns))
-              for i in range(0, max(len(frames.origins), 1), step)]
-    return [np.concatenate(column) for column in zip(*chunks)]
+def _offsets(frames: Frames) -> list[np.ndarray]:
+    """(F,) float32 each tool point's coordinate along closing and across it: a sample's ``u`` is
+    ``closing . (x, y) - offset`` in float32 (and ``v`` the same across)."""
+    return [(frames.origins[:, 0] * d[:, 0] + frames.origins[:, 1] * d[:, 1]).astype(np.float32)
+            for d in (frames.closing, frames.across)]
 
 
 def _pads_meet(surface: Surface, frames: Frames, params: GraspSynthesisParams) -> tuple:
-    """``lo``, ``hi``, ``areas`` and ``contact`` of :class:`Fit` for a chunk of frames."""
-    count, c = len(frames.origins), frames.closing
-    u, v = coordinate(surface, frames, c), coordinate(surface, frames, frames.across)
-    w = surface.points[None, :, 2] - frames.origins[:, 2, None].astype(np.float32)
-    # Between the pads' faces as they come down open: what lies beyond is outside the grasp, or in the way.
-    band = (np.abs(v) <= params.pad_half_size[1]) & (np.abs(w) <= params.pad_half_size[2]) \
-        & (np.abs(u) < params.max_opening / 2)
-    (f, s), u, v, w = np.nonzero(band), u[band], v[band], w[band]
-    lo, hi = np.full(count, np.inf, u.dtype), np.full(count, -np.inf, u.dtype)
-    np.minimum.at(lo, f, u)
-    np.maximum.at(hi, f, u)
-    facing = c[f, 0] * surface.normals[s, 0] + c[f, 1] * surface.normals[s, 1]
-    at_lo = (u <= lo[f] + params.contact_tolerance) & (facing <= -params.cos_cone)
-    at_hi = (u >= hi[f] - params.contact_tolerance) & (facing >= params.cos_cone)
-    areas = np.column_stack([np.bincount(f[at_lo], minlength=count), np.bincount(f[at_hi], minlength=count)])
-    touch = at_lo | at_hi
-    touching = np.maximum(np.bincount(f[touch], minlength=count), 1)
-    contact = np.column_stack([np.bincount(f[touch], v[touch], count), np.bincount(f[touch], w[touch], count)])
-    return lo, hi, areas * surface.area_each, contact / touching[:, None]
+    """``lo``, ``hi``, ``areas`` and ``contact`` of :class:`Fit` for the frames (the compiled walk of
+    :mod:`sim.parts.pads_kernel`; the samples between the pads' faces as they come down open)."""
+    lo, hi, counts, sums, touching = pads_meet(
+        surface.points, surface.normals, frames.origins, frames.closing, *_offsets(frames),
+        *np.float32([params.pad_half_size[1], params.pad_half_size[2], params.max_opening / 2,
+                     params.contact_tolerance]), params.cos_cone)
+    return lo, hi, counts * surface.area_each, sums / np.maximum(touching, 1)[:, None]
 
 
 def _collides(surface: Surface, frames: Frames, lo: np.ndarray, hi: np.ndarray, middle: np.ndarray,
               params: GraspSynthesisParams) -> np.ndarray:
     """(F,) whether a sample lies in a gripper box, the tool ``middle`` (F,) m along closing from the frame's
-    origin: descending fully open, then closing until the pads stop at ``lo`` and ``hi`` (F,) m from it."""
+    origin: descending fully open, then closing until the pads stop at ``lo`` and ``hi`` (F,) m from it (the
+    compiled walk of :mod:`sim.parts.pads_kernel`)."""
     m, half_open = params.clearance, params.max_opening / 2
     pad_t, pad_w, pad_h = params.pad_half_size
     finger_t, finger_w, finger_h = params.finger_half_size
@@ -213,17 +179,7 @@ def _collides(surface: Surface, frames: Frames, lo: np.ndarray, hi: np.ndarray, 
     palm_x, palm_y, palm_z = params.palm_half_size
     finger_in, finger_out = finger_x - finger_t - m, half_open + finger_x + finger_t + m
     finger_low, finger_top = finger_z - finger_h - m, finger_z + finger_h + m
-    v = coordinate(surface, frames, frames.across)
-    w = surface.points[None, :, 2] - frames.origins[:, 2, None].astype(np.float32)
-    strip = (np.abs(v) <= max(pad_w, finger_w, palm_y) + m) & (w >= min(-pad_h - m, finger_low))  # holds all boxes
-    f, av, w = np.nonzero(strip)[0], np.abs(v[strip]), w[strip]
-    u = coordinate(surface, frames, frames.closing)[strip] - middle[f]
-    au = np.abs(u)
-    # Descending: each box sweeps everything above its lower end.
-    hit = (av <= pad_w + m) & (au >= half_open - m) & (au <= half_open + 2 * pad_t + m) & (w >= -pad_h - m)
-    hit |= (av <= finger_w + m) & (au >= half_open + finger_in) & (au <= finger_out) & (w >= finger_low)
-    hit |= (av <= palm_y + m) & (au <= palm_x + m) & (w >= params.palm_height - palm_z - m)
-    # Closing: each finger sweeps in to beside its pad's stop (the pads' band holds nothing past the stops).
-    sweep = (av <= finger_w + m) & (w >= finger_low) & (w <= finger_top) & (au <= finger_out)
-    hit |= sweep & ((u >= hi[f] + finger_in) | (u <= lo[f] - finger_in))
-    return np.bincount(f[hit], minlength=len(frames.origins)) > 0
+    bounds = np.float32([max(pad_w, finger_w, palm_y) + m, min(-pad_h - m, finger_low), pad_w + m, half_open - m,
+                         half_open + 2 * pad_t + m, -pad_h - m, finger_w + m, half_open + finger_in, finger_out,
+                         finger_low, palm_y + m, palm_x + m, params.palm_height - palm_z - m, finger_top, finger_in])
+    return collides(surface.points, frames.origins, frames.closing, *_offsets(frames), lo, hi, middle, bounds)
