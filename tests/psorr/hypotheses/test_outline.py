@@ -98,6 +98,31 @@ def test_the_true_resting_pose_costs_least_and_a_wrong_model_more(library):
     assert best < 0.1 * library.model("bar").diameter
 
 
+def test_specks_of_table_joined_to_a_patch_do_not_make_it_too_wide_for_its_part(library):
+    """The table's noise lifts specks of it over the standing bar, and the closing joins those beside a part to
+    its patch: 1% of the patch's points 20 mm past its far edge, low as the table's noise, take its farthest
+    point past the bar's reach, yet the bar is still searched over it and posed."""
+    from dataclasses import replace
+
+    scene = mesh_scene(np.random.default_rng(1), PARTS, "single", names=["bar"])
+    matcher = OutlineMatcher(library.models, OutlineParams())
+    view = SceneView(scene.cloud)
+    T_cloud_table = table_frame(view.support_plane)
+    [patch] = list(matcher._patches(scene.cloud, view.support_plane, T_cloud_table))
+    centre = patch.points[:, :2].mean(axis=0)
+    away = patch.points[:, :2] - centre
+    far = np.argsort(-np.linalg.norm(away, axis=1))[: len(away) // 100]
+    specks = patch.points[far] + np.column_stack([0.02 * away[far] / np.linalg.norm(away[far], axis=1)[:, None],
+                                                  0.003 - patch.points[far, 2]])
+    specked = replace(patch, points=np.vstack([patch.points, specks]))
+    bar = library.names.index("bar")
+    shape = next(s for s in matcher.shapes if s.model == bar)
+    assert np.linalg.norm(specked.points[:, :2] - centre, axis=1).max() > shape.reach + patch.tolerance + 0.004
+    truth = np.linalg.inv(T_cloud_table) @ scene.instances[0].T_camera_model
+    offsets = [_mean_offset(library.model("bar"), T, truth) for cost, m, T in matcher._patch_poses(specked) if m == bar]
+    assert offsets and min(offsets) < 0.1 * library.model("bar").diameter
+
+
 def test_a_plate_under_an_arm_is_its_own_patch_and_still_gets_its_pose(library):
     """Points higher than any model rests (an arm reaching in) over half of the plate: in the table's plane
     they overlap the plate's cells, and joined to its patch they would make it 15 cm high."""
