@@ -39,6 +39,14 @@ def plate_with_hole(offset=0.02, thickness=0.006) -> trimesh.Trimesh:
     return trimesh.boolean.difference([plate, hole], engine="manifold")
 
 
+def open_lid(length=0.05, width=0.035, height=0.005, wall=0.0015, floor=0.002) -> trimesh.Trimesh:
+    """A shallow open box, as a cover's lid: a ``floor`` thick base and walls ``wall`` thick, ``height`` in all."""
+    outer = trimesh.creation.box((length, width, height))
+    inner = trimesh.creation.box((length - 2 * wall, width - 2 * wall, height))
+    inner.apply_translation((0.0, 0.0, floor))
+    return trimesh.boolean.difference([outer, inner], engine="manifold")
+
+
 def flanged_bushing() -> trimesh.Trimesh:
     """A bushing of radius 15 mm, 40 mm long, with a 6 mm thick flange of radius 30 mm at one end."""
     profile = np.array([(0, 0), (0.03, 0), (0.03, 0.006), (0.015, 0.006), (0.015, 0.04), (0, 0.04)])

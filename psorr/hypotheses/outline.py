@@ -38,8 +38,8 @@ class OutlineParams:
     at least ``min_height``, and no higher than any model rests (the tallest resting shape, plus
     ``height_slack`` and the depth tolerance): higher points are something else's. Patches are drawn on a grid
     of ``cell`` (also the distance fields' cell); a patch of at least ``min_area`` counts when at least
-    ``min_standing_share`` of the points in its cells stand (noise lifts scattered table points, an object all
-    of them). Each model's resting poses (its ``rests`` most probable; None: every one) whose height is within
+    ``min_standing_share`` of the points in its cells stand (the table's noise lifts specks of at most a fifth;
+    a part all, or a third where only its walls clear the noise, as a lid lying open side up). Each model's resting poses (its ``rests`` most probable; None: every one) whose height is within
     ``height_slack`` of the patch's top are searched: turns in steps of ``angle_step_deg`` and shifts of the
     centre within ``shift`` in steps of twice the cell, then the ``angles`` best turns at least four steps apart
     are refined in steps of ``fine_angle_step_deg`` and half a cell. A pose's cost is the mean square of the
@@ -55,7 +55,7 @@ class OutlineParams:
     sigmas: float = 2.0
     min_height: float = 0.0027
     min_area: float = 2e-4
-    min_standing_share: float = 0.5
+    min_standing_share: float = 0.25
     rests: int | None = None
     height_slack: float = 0.006
     angle_step_deg: float = 8.0
