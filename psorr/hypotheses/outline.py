@@ -39,7 +39,8 @@ class OutlineParams:
     ``height_slack`` and the depth tolerance): higher points are something else's. Patches are drawn on a grid
     of ``cell`` (also the distance fields' cell); a patch of at least ``min_area`` counts when at least
     ``min_standing_share`` of the points in its cells stand (the table's noise lifts specks of at most a fifth;
-    a part all, or a third where only its walls clear the noise, as a lid lying open side up). Each model's resting poses (its ``rests`` most probable; None: every one) whose height is within
+    a part all, or a third where only its walls clear the noise, as a lid lying open side up). Each model's
+    resting poses (its ``rests`` most probable; None: every one) whose height is within
     ``height_slack`` of the patch's top are searched: turns in steps of ``angle_step_deg`` and shifts of the
     centre within ``shift`` in steps of twice the cell, then the ``angles`` best turns at least four steps apart
     are refined in steps of ``fine_angle_step_deg`` and half a cell. A pose's cost is the mean square of the

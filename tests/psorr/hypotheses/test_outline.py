@@ -17,7 +17,8 @@ from psorr.verification.scene_view import SceneView
 
 pytest.importorskip("networkx", reason="trimesh's stable poses need networkx (pip install networkx)")
 
-PARTS = {"bracket": l_bracket(0.06, 0.04), "plate": plate_with_hole(), "bar": box((0.07, 0.02, 0.02)), "lid": open_lid()}
+PARTS = {"bracket": l_bracket(0.06, 0.04), "plate": plate_with_hole(), "bar": box((0.07, 0.02, 0.02)),
+         "lid": open_lid()}
 
 
 @pytest.fixture(scope="module")
