@@ -23,10 +23,17 @@ def pads_meet(points: np.ndarray, normals: np.ndarray, origins: np.ndarray, clos
     the touching samples' coordinates across closing and up, and ``touching`` (F,) their number.
 
     Args:
-        points, normals: (N, 3) float32 samples; origins: (F, 3) float64 tool points; closing: (F, 2) float64.
-        offset_u, offset_v: (F,) float32 each tool point's coordinate along closing and across it.
-        half_width, half_height, half_opening, tolerance: float32 pad half width and height, half the largest
-            opening, the contact tolerance (metres); cos_cone: the friction cone's cosine.
+        points: (N, 3) float32 surface samples.
+        normals: (N, 3) float32 their outward normals.
+        origins: (F, 3) float64 tool points.
+        closing: (F, 2) float64 unit closing directions in the table plane.
+        offset_u: (F,) float32 each tool point's coordinate along closing.
+        offset_v: (F,) float32 each tool point's coordinate across closing.
+        half_width: float32 pad half width (m).
+        half_height: float32 pad half height (m).
+        half_opening: float32 half the largest opening (m).
+        tolerance: float32 contact tolerance (m).
+        cos_cone: the friction cone's cosine.
     """
     F, N = origins.shape[0], points.shape[0]
     lo = np.full(F, np.inf, np.float32)
