@@ -167,11 +167,11 @@ def _pads_meet(surface: Surface, frames: Frames, params: GraspSynthesisParams) -
     return lo, hi, counts * surface.area_each, sums / np.maximum(touching, 1)[:, None]
 
 
-def _collides(surface: Surface, frames: Frames, lo: np.ndarray, hi: np.ndarray, middle: np.ndarray,
-              params: GraspSynthesisParams) -> np.ndarray:
-    """(F,) whether a sample lies in a gripper box, the tool ``middle`` (F,) m along closing from the frame's
-    origin: descending fully open, then closing until the pads stop at ``lo`` and ``hi`` (F,) m from it (the
-    compiled walk of :mod:`sim.parts.pads_kernel`)."""
+def box_limits(params: GraspSynthesisParams) -> np.ndarray:
+    """(15,) float32 limits (m) of the gripper's boxes about the tool, in the order
+    :func:`sim.parts.pads_kernel.collides` unpacks them: the strip that can hold a hit (across, lowest up), the
+    pads (across, nearest and farthest along closing, lowest up), the fingers (across, nearest and farthest,
+    lowest up), the palm (across, along, lowest up), the fingers' top and their inner face past a pad's stop."""
     m, half_open = params.clearance, params.max_opening / 2
     pad_t, pad_w, pad_h = params.pad_half_size
     finger_t, finger_w, finger_h = params.finger_half_size
@@ -179,7 +179,15 @@ def _collides(surface: Surface, frames: Frames, lo: np.ndarray, hi: np.ndarray, 
     palm_x, palm_y, palm_z = params.palm_half_size
     finger_in, finger_out = finger_x - finger_t - m, half_open + finger_x + finger_t + m
     finger_low, finger_top = finger_z - finger_h - m, finger_z + finger_h + m
-    bounds = np.float32([max(pad_w, finger_w, palm_y) + m, min(-pad_h - m, finger_low), pad_w + m, half_open - m,
-                         half_open + 2 * pad_t + m, -pad_h - m, finger_w + m, half_open + finger_in, finger_out,
-                         finger_low, palm_y + m, palm_x + m, params.palm_height - palm_z - m, finger_top, finger_in])
-    return collides(surface.points, frames.origins, frames.closing, *_offsets(frames), lo, hi, middle, bounds)
+    return np.float32([max(pad_w, finger_w, palm_y) + m, min(-pad_h - m, finger_low), pad_w + m, half_open - m,
+                       half_open + 2 * pad_t + m, -pad_h - m, finger_w + m, half_open + finger_in, finger_out,
+                       finger_low, palm_y + m, palm_x + m, params.palm_height - palm_z - m, finger_top, finger_in])
+
+
+def _collides(surface: Surface, frames: Frames, lo: np.ndarray, hi: np.ndarray, middle: np.ndarray,
+              params: GraspSynthesisParams) -> np.ndarray:
+    """(F,) whether a sample lies in a gripper box, the tool ``middle`` (F,) m along closing from the frame's
+    origin: descending fully open, then closing until the pads stop at ``lo`` and ``hi`` (F,) m from it (the
+    compiled walk of :mod:`sim.parts.pads_kernel`)."""
+    return collides(surface.points, frames.origins, frames.closing, *_offsets(frames), lo, hi, middle,
+                    box_limits(params))

@@ -80,7 +80,7 @@ def collides(points: np.ndarray, origins: np.ndarray, closing: np.ndarray, offse
              bounds: np.ndarray) -> np.ndarray:
     """(F,) whether a sample lies in a gripper box at each frame, the tool ``middle`` (F,) float32 m along closing
     from the frame's origin, the pads stopping at ``lo`` and ``hi`` (F,) float32 m from it; ``bounds`` (15,)
-    float32 are the boxes' limits (:func:`sim.parts.gripper_fit._collides` names them). A frame's walk stops at
+    float32 are the boxes' limits (:func:`sim.parts.gripper_fit.box_limits` names them). A frame's walk stops at
     its first hit."""
     F, N = origins.shape[0], points.shape[0]
     hit = np.zeros(F, np.bool_)

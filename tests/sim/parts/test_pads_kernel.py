@@ -6,7 +6,7 @@ import pytest
 import trimesh
 
 from sim.parts.grasp_synthesis import GraspSynthesisParams
-from sim.parts.gripper_fit import Frames, Surface, ahead, measure
+from sim.parts.gripper_fit import Frames, Surface, ahead, box_limits, measure
 
 PARAMS = GraspSynthesisParams()
 
@@ -38,23 +38,18 @@ def _pads_meet(surface, frames, p):
 
 
 def _collides(surface, frames, lo, hi, middle, p):
-    m, half_open = p.clearance, p.max_opening / 2
-    pad_t, pad_w, pad_h = p.pad_half_size
-    finger_t, finger_w, finger_h = p.finger_half_size
-    finger_x, finger_z = p.finger_offset
-    palm_x, palm_y, palm_z = p.palm_half_size
-    finger_in, finger_out = finger_x - finger_t - m, half_open + finger_x + finger_t + m
-    finger_low, finger_top = finger_z - finger_h - m, finger_z + finger_h + m
+    (strip_v, strip_w, pad_v, pad_u_lo, pad_u_hi, pad_w_lo, fin_v, fin_u_lo, fin_u_hi, fin_w_lo, palm_v, palm_u,
+     palm_w, fin_w_hi, finger_in) = box_limits(p)
     v = _coordinate(surface, frames, frames.across)
     w = surface.points[None, :, 2] - frames.origins[:, 2, None].astype(np.float32)
-    strip = (np.abs(v) <= max(pad_w, finger_w, palm_y) + m) & (w >= min(-pad_h - m, finger_low))
+    strip = (np.abs(v) <= strip_v) & (w >= strip_w)
     f, av, w = np.nonzero(strip)[0], np.abs(v[strip]), w[strip]
     u = _coordinate(surface, frames, frames.closing)[strip] - middle[f]
     au = np.abs(u)
-    hit = (av <= pad_w + m) & (au >= half_open - m) & (au <= half_open + 2 * pad_t + m) & (w >= -pad_h - m)
-    hit |= (av <= finger_w + m) & (au >= half_open + finger_in) & (au <= finger_out) & (w >= finger_low)
-    hit |= (av <= palm_y + m) & (au <= palm_x + m) & (w >= p.palm_height - palm_z - m)
-    sweep = (av <= finger_w + m) & (w >= finger_low) & (w <= finger_top) & (au <= finger_out)
+    hit = (av <= pad_v) & (au >= pad_u_lo) & (au <= pad_u_hi) & (w >= pad_w_lo)
+    hit |= (av <= fin_v) & (au >= fin_u_lo) & (au <= fin_u_hi) & (w >= fin_w_lo)
+    hit |= (av <= palm_v) & (au <= palm_u) & (w >= palm_w)
+    sweep = (av <= fin_v) & (w >= fin_w_lo) & (w <= fin_w_hi) & (au <= fin_u_hi)
     hit |= sweep & ((u >= hi[f] + finger_in) | (u <= lo[f] - finger_in))
     return np.bincount(f[hit], minlength=len(frames.origins)) > 0
 
