@@ -12,6 +12,8 @@ symmetries found from the mesh (psorr.synthetic.mesh_symmetry); any other detect
 psorr and orr (psorr.Recognizer), o3d_global (Open3D's global registration tutorial per model,
 peer_o3d_global.py), fpfh (cluster-wise FPFH, peer_fpfh.py) and opencv_ppf (peer_opencv.py; skipped
 without OpenCV's contrib modules). Every method runs on one core, on a scene before the next scene.
+Each model of the half is also trained once more alone, from its mesh file with the cache off, and
+timed: a user's first run.
 
     python benchmarks/generalization.py [--split dev|test|both] [--quick] [--note "what else ran"]
 
@@ -130,6 +132,7 @@ def run_split(split: str, meshes: dict, paths: dict, args) -> dict:
     infos = {n: part_info(n, parts[n]) for n in tqdm(names, desc=f"{split}: symmetries and classes", file=sys.stderr)}
     library = ModelLibrary.from_meshes([paths[n] for n in names], units=args.units,
                                        progress=lambda p: tqdm(p, desc=f"{split}: training", file=sys.stderr))
+    train_ms = _training_ms(names, paths, args.units, split) if {"psorr", "orr"} & set(args.methods.split(",")) else {}
     methods = _methods(args.methods.split(","), library, parts)
     results = {m: {"ms": [], "false": [], "found": [], "add_mm": []} for m in methods}
     scenes, sketches, start = [], {}, time.perf_counter()
@@ -152,7 +155,15 @@ def run_split(split: str, meshes: dict, paths: dict, args) -> dict:
     conditions = (f"run {time.strftime('%Y-%m-%d')} in {(time.perf_counter() - start) / 60:.0f} min on core {core} "
                   f"of {os.cpu_count()}" + (f"; {args.note}" if args.note else ""))
     return {"parts": [class_row(infos[n]) for n in names], "scenes": scenes, "methods": results,
-            "sketches": list(sketches.values()), "conditions": conditions}
+            "sketches": list(sketches.values()), "conditions": conditions, "train_ms": train_ms}
+
+
+def _training_ms(names: list[str], paths: dict, units: str, split: str) -> dict[str, float]:
+    """name -> ms to train that one model from its mesh file as a user's first run does (the cache off)."""
+    from psorr.library.models import ModelLibrary
+
+    return {n: round(ModelLibrary.from_meshes([paths[n]], units=units, use_cache=False).train_ms, 1)
+            for n in tqdm(names, desc=f"{split}: training timed, no cache", file=sys.stderr)}
 
 
 def _drawn(data: dict, meshes: dict) -> list:
@@ -185,6 +196,7 @@ def _merged(old: dict | None, new: dict) -> dict:
     for m in order:
         grouped.setdefault(runs[m], []).append(m)
     return {**new, "methods": {m: methods[m] for m in order}, "runs": {m: runs[m] for m in order},
+            "train_ms": new.get("train_ms") or old.get("train_ms", {}),
             "sketches": new["sketches"] if "psorr" in new["methods"] else old.get("sketches", []),
             "conditions": "; ".join(f"{', '.join(ms)}: {c}" for c, ms in grouped.items())}
 

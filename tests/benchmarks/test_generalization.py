@@ -75,3 +75,11 @@ def test_the_tables_say_what_was_met():
     assert "| dev | median ms / scene | 200 | <= 300 | met |" in targets
     assert "**missed**" in targets
     assert "plate | dev | thin | 50-100 mm | 1/2 | 1/2" in report.parts_table(data)
+
+
+def test_training_is_judged_by_the_slowest_model():
+    data = _results()
+    data["splits"]["dev"]["train_ms"] = {"plate": 420.0, "block": 1250.0}
+    assert "| dev | training ms / model (slowest) | 1250 | <= 1000 | **missed** |" in report.targets_table(data)
+    assert report.training_lines(data) == "- dev: 2 models, a median of 835 ms each, the slowest block in 1250 ms"
+    assert "training ms" not in report.targets_table(_results())  # a run before training was timed
