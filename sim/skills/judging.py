@@ -17,11 +17,16 @@ from sim.skills.grasp_planning import angle_deg, upright_equivalent
 from sim.skills.in_hand import InHandLook
 from sim.skills.part_geometry import hull_points, lowest_point
 from sim.world import World
+from sim.world.tote import ToteLayout
 
 MIN_LIFT = 0.05  # m the part must rise to count as grasped
 PLACE_TOL_MM = 5.0
 PLACE_TOL_DEG = 3.0
 REST_TOL_MM = 3.0  # the seated part's origin (its resting face) within this of the table top
+AT_REST_MM_S = 1.0  # a part moving slower than this is at rest
+TOTE_SETTLE_S = 0.5  # s a part set down in the tote is left before it is judged at rest
+# s at most it is left to come to rest: a part set down leaning on a wall slides down it for a while
+TOTE_SETTLE_MAX_S = 2.0
 REST_TOL = 0.02  # m: estimates further from the table top than this are not resting on it
 REST_TILT_DEG = 20.0  # estimates tilted more than this are not resting on the table
 
@@ -145,8 +150,9 @@ def not_resting_note(world: World, T_est: np.ndarray) -> str:
 @dataclass(frozen=True)
 class ToteSeating:
     """Where a released part ended in the tote (truth): ``inside`` (every corner of its hull within the tote's
-    walls), ``lowest_mm`` its lowest point over the table, ``speed_mm_s`` its speed, and ``slot_mm`` its
-    origin's distance from its slot in the table plane."""
+    walls, up to REST_TOL_MM and the walls' inner half, as its lowest point is judged against the floor),
+    ``lowest_mm`` its lowest point over the table, ``speed_mm_s`` its speed, and ``slot_mm`` its origin's
+    distance from its slot in the table plane."""
 
     inside: bool
     lowest_mm: float
@@ -164,13 +170,21 @@ class ToteSeating:
 
     @property
     def placed(self) -> bool:
-        """Inside the tote, down on its floor (within REST_TOL_MM), and at rest (under 1 mm/s)."""
-        return bool(self.inside and abs(self.lowest_mm) <= REST_TOL_MM and self.speed_mm_s < 1.0)
+        """Inside the tote, down on its floor (within REST_TOL_MM), and at rest (under AT_REST_MM_S)."""
+        return bool(self.inside and abs(self.lowest_mm) <= REST_TOL_MM and self.speed_mm_s < AT_REST_MM_S)
 
     def note(self) -> str:
         verdict = "placed in the tote" if self.placed else "not placed in the tote"
         return (f"{verdict}: {'inside' if self.inside else 'outside'} its walls, {self.slot_mm:.0f} mm from its "
                 f"slot, lowest point {self.lowest_mm:+.1f} mm over the table, moving {self.speed_mm_s:.1f} mm/s")
+
+
+def inside_walls(tote: ToteLayout, xy_in_tote: np.ndarray, wall: float) -> bool:
+    """Whether the tote-frame points (N, 2) of a part lie inside the walls (``wall`` metres thick) of ``tote``."""
+    # A part at rest against a wall presses into it by the contact's give, as it does into the floor: an
+    # extruder body lying against the inside of the wall was judged outside by 0.1 mm. Within the wall's
+    # inner half it cannot be a part outside the tote.
+    return tote.holds(xy_in_tote, margin=min(REST_TOL_MM / 1e3, wall / 2))
 
 
 def tote_seating(world: World, part: str) -> ToteSeating:
@@ -182,10 +196,23 @@ def tote_seating(world: World, part: str) -> ToteSeating:
     adr = world.model.jnt_dofadr[world.model.joint(f"{part}_joint").id]
     speed = float(np.linalg.norm(world.data.qvel[adr:adr + 3])) * 1e3
     origin = T_tote_world[:2, :3] @ T[:3, 3] + T_tote_world[:2, 3]
-    return ToteSeating(world.tote.holds(corners[:, :2]), (corners[:, 2].min()) * 1e3, speed,
+    return ToteSeating(inside_walls(world.tote, corners[:, :2], world.config.tote_wall[0]), corners[:, 2].min() * 1e3,
+                       speed,
                        float(np.linalg.norm(origin - slot)) * 1e3)
 
 
-def placement(world: World, part: str) -> Seating | ToteSeating:
-    """Where ``part`` is now against its place: its fixture, or the tote (read from ``world.data``)."""
-    return tote_seating(world, part) if world.places.get(part) == "tote" else seating(world, part)
+def tote_seating_at_rest(cell, world: World, part: str) -> ToteSeating:
+    """Where ``part`` lies in the tote once at rest: ``cell`` is held TOTE_SETTLE_S, then on until the part
+    moves slower than AT_REST_MM_S, for TOTE_SETTLE_MAX_S in all at most."""
+    cell.hold(TOTE_SETTLE_S)
+    waited, seated = TOTE_SETTLE_S, tote_seating(world, part)
+    while seated.speed_mm_s >= AT_REST_MM_S and waited < TOTE_SETTLE_MAX_S:
+        cell.hold(0.1)
+        waited, seated = waited + 0.1, tote_seating(world, part)
+    return seated
+
+
+def placement(cell, world: World, part: str) -> Seating | ToteSeating:
+    """Where ``part`` is now against its place: its fixture, or the tote once it is at rest there
+    (:func:`tote_seating_at_rest`, holding ``cell``), read from ``world.data``."""
+    return tote_seating_at_rest(cell, world, part) if world.places.get(part) == "tote" else seating(world, part)

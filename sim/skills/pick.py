@@ -37,8 +37,6 @@ from sim.skills.in_hand import InHandLook, look_in_hand
 from sim.skills.judging import MIN_LIFT, PickResult, not_resting_note, placement, pose_error, resting_on_table
 from sim.world import World
 
-TOTE_SETTLE_S = 0.5  # s a part set down in the tote is left before it is judged at rest
-
 
 @dataclass(frozen=True, eq=False)
 class PickStart:
@@ -274,9 +272,7 @@ def retreat(start: PickStart, released: Released) -> None:
 
 def judge(start: PickStart, plan: GraspPlan, lifted: Lifted, seat: Seat) -> PickResult:
     """The result of a pick carried through: where the part ended against its fixture or in the tote (truth)."""
-    if start.world.places.get(start.part) == "tote":
-        start.cell.hold(TOTE_SETTLE_S)
-    seated = placement(start.world, start.part)
+    seated = placement(start.cell, start.world, start.part)
     return start.result(plan.grasp.name, True, lifted.height, seated.placed, seated.error_mm, seated.yaw_deg,
                         seat.note + seated.note(), seat.in_hand)
 
