@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -18,6 +19,9 @@ from sim.skills.in_hand import InHandLook
 from sim.skills.part_geometry import hull_points, lowest_point
 from sim.world import World
 from sim.world.tote import ToteLayout
+
+if TYPE_CHECKING:
+    from sim.control.cell import ArmCell
 
 MIN_LIFT = 0.05  # m the part must rise to count as grasped
 PLACE_TOL_MM = 5.0
@@ -196,12 +200,11 @@ def tote_seating(world: World, part: str) -> ToteSeating:
     adr = world.model.jnt_dofadr[world.model.joint(f"{part}_joint").id]
     speed = float(np.linalg.norm(world.data.qvel[adr:adr + 3])) * 1e3
     origin = T_tote_world[:2, :3] @ T[:3, 3] + T_tote_world[:2, 3]
-    return ToteSeating(inside_walls(world.tote, corners[:, :2], world.config.tote_wall[0]), corners[:, 2].min() * 1e3,
-                       speed,
-                       float(np.linalg.norm(origin - slot)) * 1e3)
+    inside = inside_walls(world.tote, corners[:, :2], world.config.tote_wall[0])
+    return ToteSeating(inside, corners[:, 2].min() * 1e3, speed, float(np.linalg.norm(origin - slot)) * 1e3)
 
 
-def tote_seating_at_rest(cell, world: World, part: str) -> ToteSeating:
+def tote_seating_at_rest(cell: ArmCell, world: World, part: str) -> ToteSeating:
     """Where ``part`` lies in the tote once at rest: ``cell`` is held TOTE_SETTLE_S, then on until the part
     moves slower than AT_REST_MM_S, for TOTE_SETTLE_MAX_S in all at most."""
     cell.hold(TOTE_SETTLE_S)
@@ -212,7 +215,7 @@ def tote_seating_at_rest(cell, world: World, part: str) -> ToteSeating:
     return seated
 
 
-def placement(cell, world: World, part: str) -> Seating | ToteSeating:
+def placement(cell: ArmCell, world: World, part: str) -> Seating | ToteSeating:
     """Where ``part`` is now against its place: its fixture, or the tote once it is at rest there
     (:func:`tote_seating_at_rest`, holding ``cell``), read from ``world.data``."""
     return tote_seating_at_rest(cell, world, part) if world.places.get(part) == "tote" else seating(world, part)
