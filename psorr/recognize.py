@@ -19,6 +19,7 @@ import numpy as np
 
 from psorr.acceptance.accept import Acceptance
 from psorr.acceptance.by_patch import every_patch_found
+from psorr.acceptance.by_rank import accept_by_rank
 from psorr.acceptance.claims import PixelClaims, SearchResult, SearchTally
 from psorr.acceptance.known import known_candidates
 from psorr.acceptance.unexplained import DetectedSurfaces
@@ -75,11 +76,10 @@ class Recognizer:
         self.scene_decompose = replace(self.params.decompose, thin_finer=False)
         self.max_diameter = max(m.diameter for m in library.models)
         p = self.params
-        # Candidates of random point pairs start rougher than those of primitive pairs: PSORR's that end up
-        # accepted are seen through by at most 0.08 after the coarse fit (110 fits, the peers benchmark's 22
-        # scenes), so PSORR gives up above twice the acceptance bar; a bushing seen through by half from ORR
-        # still converged.
-        coarse_limit = 2 * p.acceptance.max_violation_ratio if self.method is Method.PSORR else 1.0
+        # Random point pairs start rougher than primitives: PSORR's accepted candidates are seen through by at
+        # most 0.08 after the coarse fit (110 fits, the peers' 22 scenes), so PSORR and PSG (cliques of
+        # primitives) give up above twice the acceptance bar; from ORR, a bushing seen through by half converged.
+        coarse_limit = 1.0 if self.method is Method.ORR else 2 * p.acceptance.max_violation_ratio
         self.acceptance = Acceptance(library, p.acceptance, coarse_limit)
         self.detected = DetectedSurfaces(library.models, p.acceptance.icp_distance / 2, p.support_crop.off_plane,
                                          _TABLE_EXTENT * self.max_diameter, p.detail.min_unexplained)
@@ -255,7 +255,7 @@ class Recognizer:
         # Primitives no detection explains yet; those an earlier search's detections explain are out.
         open_ = np.array([not self.detected.explain(tally.detections, m) for m in members], dtype=bool)
         if self.method is Method.PSG:  # the shape graph's cliques in place of the pair rounds
-            more = self._cliques(view, scene, tally, table)
+            more = self._cliques(cloud, view, scene, tally, table)
             open_ &= np.array([not self.detected.explain(more, m) for m in members], dtype=bool)
         else:
             open_ = self._pair_rounds(view, pts, nrm, prims, members, open_, tally)
@@ -283,13 +283,14 @@ class Recognizer:
                 break
         return open_
 
-    def _cliques(self, view, scene, tally: SearchTally, table: int | None) -> list:
-        """PSG: the scene graph's cliques matched, settled by QPBO and accepted; the new detections."""
+    def _cliques(self, cloud, view, scene, tally: SearchTally, table: int | None) -> list:
+        """PSG: the scene graph's cliques matched, settled by QPBO and accepted rank by rank
+        (:func:`~psorr.acceptance.by_rank.accept_by_rank`); the new detections."""
         found = self.psg.candidates(scene.graph, _TABLE_EXTENT * self.max_diameter, table)
         tally.add(found.found.hypotheses, found.found.verify_ms)
         tally.qpbo_nodes += found.nodes
         tally.qpbo_unlabelled += found.unlabelled
-        return self.acceptance(view, found.found.candidates, tally.claims)
+        return accept_by_rank(self.acceptance, self.detected, view, cloud, scene, found, tally.claims)
 
     def _single_search(self, view, tally: SearchTally, found, beyond=None, fine_starts: bool = False) -> None:
         """The candidates ``found`` from single primitives go through acceptance (poses from one cylinder

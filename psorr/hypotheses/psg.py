@@ -58,11 +58,15 @@ class PsgParams:
 
 @dataclass(frozen=True, eq=False)
 class PsgCandidates:
-    """The candidates for acceptance, and QPBO's nodes: how many, and how many it left unlabelled."""
+    """The candidates for acceptance, and QPBO's nodes: how many, and how many it left unlabelled.
+    ``vertices``: per candidate, the scene primitives its clique matched, the table apart; ``ranks``: per
+    candidate, how many of its model's candidates come before it (0 for each model's best)."""
 
     found: CandidateSet
     nodes: int
     unlabelled: int
+    vertices: tuple[tuple[int, ...], ...] = ()
+    ranks: tuple[int, ...] = ()
 
 
 @dataclass(frozen=True, eq=False)
@@ -70,6 +74,7 @@ class _Hypotheses:
     poses: np.ndarray          # (H, 4, 4)
     models: np.ndarray         # (H,)
     nodes: list[tuple]         # per hypothesis, its (scene primitive, model, model primitive) correspondences
+    table: int                 # the table's vertex, -1 for none
 
 
 class PsgMatcher:
@@ -112,7 +117,9 @@ class PsgMatcher:
         order = share_out(_distinct(order, found.poses, found.models, self.params), found.models, self.params.top)
         verify_ms = (time.perf_counter() - start) * 1e3
         chosen = CandidateSet.chosen(found.models, found.poses, order, len(found.poses), verify_ms, scores)
-        return PsgCandidates(chosen, n_nodes, n_unlabelled)
+        vertices = tuple(tuple(sorted({n[0] for n in found.nodes[k]} - {found.table})) for k in order)
+        ranks = tuple(int(np.sum(found.models[order[:i]] == found.models[k])) for i, k in enumerate(order))
+        return PsgCandidates(chosen, n_nodes, n_unlabelled, vertices, ranks)
 
     def _hypotheses(self, graph: PrimitiveShapeGraph, max_extent: float, table: int | None) -> _Hypotheses:
         graph, table = _table_turned_over(graph, max_extent, table)
@@ -138,7 +145,7 @@ class PsgMatcher:
                             poses.append(T)
                             models.append(index)
                             nodes.append(tuple((s, index, m) for s, m in zip(scene.vertices, model.vertices)))
-        return _Hypotheses(np.array(poses).reshape(-1, 4, 4), np.array(models, dtype=np.int64), nodes)
+        return _Hypotheses(np.array(poses).reshape(-1, 4, 4), np.array(models, dtype=np.int64), nodes, table)
 
     def _sizes_fit(self, prims, table: int):
         """A test of matched cliques (scene vertices (K, v), owners (K,), model vertices (K, v)) -> (K,) bool:
