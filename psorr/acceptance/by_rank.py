@@ -29,15 +29,31 @@ def accept_by_rank(acceptance: Acceptance, detected: DetectedSurfaces, view: Sce
     def conflicts(candidate, vertices) -> bool:
         model = names[candidate.model]
         others = [d for d in detections if d.model != model]
-        return bool(vertices) and bool(others) and all(explained.setdefault((k, model), detected.explain(
-            others, cloud.points[scene.labels == k])) for k in vertices)
+        if not vertices or not others:
+            return False
+        for k in vertices:
+            if (k, model) not in explained:
+                explained[k, model] = detected.explain(others, cloud.points[scene.labels == k])
+            if not explained[k, model]:
+                return False
+        return True
 
-    for rank in sorted(set(found.ranks)):
-        turn = [c for c, r, v in zip(found.found.candidates, found.ranks, found.vertices)
-                if r == rank and not conflicts(c, v)]
-        more = acceptance(view, turn, claims)
+    for turn in _ranks(found.found.candidates, found.vertices):
+        more = acceptance(view, [c for c, v in turn if not conflicts(c, v)], claims)
         if more:
             detections += more
             explained = {key: True for key, e in explained.items() if e}  # the new ones may explain more
     standing = {id(d) for d in claims.detections}
     return [d for d in detections if id(d) in standing]
+
+
+def _ranks(candidates, vertices) -> list[list[tuple]]:
+    """(candidate, its vertices) grouped by rank: the k-th group holds each model's k-th candidate, in order."""
+    ranks: list[list[tuple]] = []
+    seen: dict[int, int] = {}
+    for c, v in zip(candidates, vertices, strict=True):
+        rank = seen[c.model] = seen.get(c.model, -1) + 1
+        if rank == len(ranks):
+            ranks.append([])
+        ranks[rank].append((c, v))
+    return ranks

@@ -59,14 +59,12 @@ class PsgParams:
 @dataclass(frozen=True, eq=False)
 class PsgCandidates:
     """The candidates for acceptance, and QPBO's nodes: how many, and how many it left unlabelled.
-    ``vertices``: per candidate, the scene primitives its clique matched, the table apart; ``ranks``: per
-    candidate, how many of its model's candidates come before it (0 for each model's best)."""
+    ``vertices``: per candidate, the scene primitives its clique matched, the table apart."""
 
     found: CandidateSet
     nodes: int
     unlabelled: int
-    vertices: tuple[tuple[int, ...], ...] = ()
-    ranks: tuple[int, ...] = ()
+    vertices: tuple[tuple[int, ...], ...]
 
 
 @dataclass(frozen=True, eq=False)
@@ -118,8 +116,7 @@ class PsgMatcher:
         verify_ms = (time.perf_counter() - start) * 1e3
         chosen = CandidateSet.chosen(found.models, found.poses, order, len(found.poses), verify_ms, scores)
         vertices = tuple(tuple(sorted({n[0] for n in found.nodes[k]} - {found.table})) for k in order)
-        ranks = tuple(int(np.sum(found.models[order[:i]] == found.models[k])) for i, k in enumerate(order))
-        return PsgCandidates(chosen, n_nodes, n_unlabelled, vertices, ranks)
+        return PsgCandidates(chosen, n_nodes, n_unlabelled, vertices)
 
     def _hypotheses(self, graph: PrimitiveShapeGraph, max_extent: float, table: int | None) -> _Hypotheses:
         graph, table = _table_turned_over(graph, max_extent, table)

@@ -42,10 +42,10 @@ def _scene():
 
 
 def _found(rows):
-    """rows: (model index, rank, scene primitives) per candidate, in order."""
+    """rows: (model index, its rank, scene primitives) per candidate, in order; the rank is read off the order,
+    and given here for the reader."""
     candidates = tuple(Candidate(m, np.eye(4), score=i / 10) for i, (m, _, _) in enumerate(rows))
-    return PsgCandidates(CandidateSet(candidates, len(rows)), 0, 0, tuple(v for _, _, v in rows),
-                         tuple(r for _, r, _ in rows))
+    return PsgCandidates(CandidateSet(candidates, len(rows)), 0, 0, tuple(v for _, _, v in rows))
 
 
 def test_a_later_rank_of_another_model_on_explained_primitives_is_not_fitted():
