@@ -33,7 +33,7 @@ from psorr.library.symmetries import (
     near_symmetries,
     near_uniform_direction,
 )
-from psorr.verification.depth_compare import DepthRenderer, residual_costs, twin_costs
+from psorr.verification.depth_compare import DISCRIMINATIVE_SIGMAS, DepthRenderer, residual_costs, twin_costs
 from psorr.verification.point_check import CheckParams, PoseCheck, check_pose
 from psorr.verification.scene_view import SceneView
 
@@ -182,12 +182,15 @@ class NearSymmetryResolver:
             # 1's full views). So only the features' pixels count: where each pose, turned in place, renders
             # differently from itself. Outside them the two are the same part in nearly the same place.
             S = self.turns[k]
-            costs, telling = twin_costs(view, self.renderer, np.array([T, turned[k], T @ S, turned[k] @ S]),
-                                        [(0, 2), (1, 3)], self._centre_of(T), 0.5 * self.model.diameter)
+            costs, evidence = twin_costs(view, self.renderer, np.array([T, turned[k], T @ S, turned[k] @ S]),
+                                         [(0, 2), (1, 3)], self._centre_of(T), 0.5 * self.model.diameter)
             # Where the pose found and its own twin render alike, the view does not show the features:
             # the poses tie, whatever the turned pose, refitted a millimetre away, renders differently
-            # from its twin over a few pixels at the bar (a hole shallower than it, decision 0067).
-            if not telling[0]:
+            # from its twin over a few pixels (decision 0067). The features show when the cost the wrong
+            # twin adds in expectation, E, stands DISCRIMINATIVE_SIGMAS of its own noise (2 sqrt(E) in squared
+            # sigmas) above zero: a hole through a plate thinner than the per-pixel bar shows, over many
+            # pixels; a slot narrower than a pixel, hit by a ray or two, does not (decision 0068).
+            if evidence[0] < (2 * DISCRIMINATIVE_SIGMAS) ** 2:
                 ratios[k] = 1.0
             elif costs[0] > 0:
                 ratios[k] = costs[1] / costs[0]

@@ -107,16 +107,22 @@ def residual_costs(view: SceneView, renderer: DepthRenderer, poses: np.ndarray, 
 def twin_costs(view: SceneView, renderer: DepthRenderer, poses: np.ndarray, twins: list[tuple[int, int]],
                centre: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray]:
     """(K,) cost of each pose (K, 4, 4), as :func:`residual_costs`, over the pixels around the sphere where
-    some pose a of the ``twins`` pairs (a, b) of indices into ``poses`` renders differently from its twin b;
-    and (len(twins),) how many pixels each pair tells apart (none: the features that tell those twins
-    apart do not show in this view)."""
+    some pose a of the ``twins`` pairs (a, b) of indices into ``poses`` renders differently from its twin b
+    by more than the sensor's sigma there; and (len(twins),) each pair's evidence: the squared depth gap
+    between its renders in sigmas (capped as a residual is), summed over those pixels. That is what the
+    wrong one of a pair costs above the right one in expectation; where it is small, the features that
+    tell the pair apart do not show."""
     window = _window_costs(view, centre, radius, lambda rays: renderer.depth(poses, rays))
     if window is None:
-        return np.zeros(len(poses)), np.zeros(len(twins), dtype=int)
+        return np.zeros(len(poses)), np.zeros(len(twins))
     cost, rendered, sigma = window
     a, b = np.array(twins).T
-    telling = differs(rendered[a], rendered[b], sigma)
-    return cost[:, telling.any(axis=0)].sum(axis=1), telling.sum(axis=1)
+    hits = np.isfinite(rendered[a]) != np.isfinite(rendered[b])
+    with np.errstate(invalid="ignore"):
+        gap = np.where(hits, np.inf, np.nan_to_num(np.abs(rendered[a] - rendered[b]) / sigma[None], nan=0.0))
+    telling = gap > 1.0  # the wrong pose's expected cost there at least twice the right one's (1 + gap^2 against 1)
+    evidence = np.where(telling, np.minimum(gap**2, RESIDUAL_CAP), 0.0).sum(axis=1)
+    return cost[:, telling.any(axis=0)].sum(axis=1), evidence
 
 
 def rival_costs(view: SceneView, rivals: list[tuple[DepthRenderer, np.ndarray]], centre: np.ndarray,

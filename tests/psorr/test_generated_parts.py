@@ -87,9 +87,9 @@ def test_a_scene_of_none_of_the_models_gives_no_detection(recognizer, seed):
 def test_a_plate_thinner_than_the_depth_tolerance_lying_flat_is_found(tmp_path):
     # 4 mm: at 0.6-1.0 m no point of it stands clear of the depth tolerance, but its face stands a
     # disparity step or more above the table (psorr/acceptance/thin_parts.py). Seeds 0-9 (as a run gave):
-    # 7 found, 1 turned end for end with its twin left open (its hole, 4 mm deep, is under the 3-sigma bar
-    # that tells a part's twins apart, so the twins tie: decision 0067), 2 rejected; 0 of 10 (2 of them
-    # posed wrong) when every pose needed 30 points standing clear of the tolerance.
+    # 9 found, 1 rejected; its hole, 4 mm deep, is under the 3-sigma bar at every pixel but tells its ends
+    # apart over its pixels (decision 0068). 0 of 10 (2 of them posed wrong) when every pose needed 30
+    # points standing clear of the tolerance.
     parts = {"thin_plate": plate_with_hole(thickness=0.004), "bar": PARTS["bar"], "roller": PARTS["roller"]}
     recognizer = Recognizer(trained_library(parts, tmp_path))
     known = {name: (trimesh.sample.sample_surface(mesh, 1000, seed=0)[0], find_symmetries(mesh),

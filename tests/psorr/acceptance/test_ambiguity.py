@@ -236,3 +236,25 @@ def test_a_chassis_whose_end_wall_faces_the_sensor_is_settled(parts):
     view, model, _, T = _chassis_view(parts, 1, partial=True)
     _, _, alternatives = NearSymmetryResolver(model).resolve(view, T, 0.012)
     assert alternatives == ()
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_hole_through_a_plate_thinner_than_the_bar_tells_its_ends_apart(tmp_path, seed):
+    """A 4 mm plate lying flat, started turned end for end (its 12 mm hole at the wrong end): the hole is
+    shallower than 3 sigmas at every pixel, but over its pixels it shows (decision 0068), so the plate is
+    turned back, not left as a tie."""
+    from part_meshes import plate_with_hole, trained_library
+
+    from psorr.synthetic.mesh_scenes import mesh_scene
+
+    plate = plate_with_hole(thickness=0.004)
+    resolver = NearSymmetryResolver(trained_library({"plate": plate}, tmp_path).model("plate"))
+    scene = mesh_scene(np.random.default_rng(seed), {"plate": plate}, "single", names=["plate"])
+    T_true = scene.instances[0].T_camera_model
+    hole_true = T_true[:3, :3] @ [0.02, 0.0, 0.0] + T_true[:3, 3]
+    end_for_end = [S for S in resolver.turns
+                   if np.linalg.norm((T_true @ S)[:3, :3] @ [0.02, 0.0, 0.0] + (T_true @ S)[:3, 3] - hole_true) > 0.03]
+    assert end_for_end, "the plate's turn that moves its hole to the other end is among its near-symmetries"
+    T, _, _ = resolver.resolve(SceneView(scene.cloud), T_true @ end_for_end[0], 0.01)
+    hole_found = T[:3, :3] @ [0.02, 0.0, 0.0] + T[:3, 3]
+    assert np.linalg.norm(hole_found - hole_true) < 0.005
