@@ -52,6 +52,11 @@ SWITCH_RATIO = 0.9
 # where its end walls are seen edge-on (Table 1's full views, the demo cell's), the wrong end costs
 # 0.97-1.39 times the right one; where they face the sensor (Table 1's partial views), 1.6-3.0.
 UNRESOLVED_RATIO = 1.5
+# A twin's features show when the cost the wrong pose adds in expectation, E (squared sigmas summed over the
+# pixels), stands DISCRIMINATIVE_SIGMAS of its own noise, 2 sqrt(E), above zero: E >= 36. A hole through a plate
+# thinner than the per-pixel bar shows over many pixels; a slot narrower than a pixel, met by a ray or two, does
+# not (decision 0068).
+FEATURES_SHOW = (2 * DISCRIMINATIVE_SIGMAS) ** 2
 
 # A model's near-symmetries (turns, which of them are exact but for features, axis, slide direction), by
 # model object: Models are immutable.
@@ -186,11 +191,8 @@ class NearSymmetryResolver:
                                          [(0, 2), (1, 3)], self._centre_of(T), 0.5 * self.model.diameter)
             # Where the pose found and its own twin render alike, the view does not show the features:
             # the poses tie, whatever the turned pose, refitted a millimetre away, renders differently
-            # from its twin over a few pixels (decision 0067). The features show when the cost the wrong
-            # twin adds in expectation, E, stands DISCRIMINATIVE_SIGMAS of its own noise (2 sqrt(E) in squared
-            # sigmas) above zero: a hole through a plate thinner than the per-pixel bar shows, over many
-            # pixels; a slot narrower than a pixel, hit by a ray or two, does not (decision 0068).
-            if evidence[0] < (2 * DISCRIMINATIVE_SIGMAS) ** 2:
+            # from its twin over a few pixels (decisions 0067 and 0068).
+            if evidence[0] < FEATURES_SHOW:
                 ratios[k] = 1.0
             elif costs[0] > 0:
                 ratios[k] = costs[1] / costs[0]

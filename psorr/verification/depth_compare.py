@@ -108,10 +108,10 @@ def twin_costs(view: SceneView, renderer: DepthRenderer, poses: np.ndarray, twin
                centre: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray]:
     """(K,) cost of each pose (K, 4, 4), as :func:`residual_costs`, over the pixels around the sphere where
     some pose a of the ``twins`` pairs (a, b) of indices into ``poses`` renders differently from its twin b
-    by more than the sensor's sigma there; and (len(twins),) each pair's evidence: the squared depth gap
-    between its renders in sigmas (capped as a residual is), summed over those pixels. That is what the
-    wrong one of a pair costs above the right one in expectation; where it is small, the features that
-    tell the pair apart do not show."""
+    by more than the sensor's sigma, each pixel weighted by how much it tells: the squared gap between the
+    renders in sigmas, capped as a residual is, over the cap (1 at the discrimination bar and beyond); and
+    (len(twins),) each pair's evidence: those squared gaps summed, what the wrong one of a pair costs above
+    the right one in expectation."""
     window = _window_costs(view, centre, radius, lambda rays: renderer.depth(poses, rays))
     if window is None:
         return np.zeros(len(poses)), np.zeros(len(twins))
@@ -120,9 +120,10 @@ def twin_costs(view: SceneView, renderer: DepthRenderer, poses: np.ndarray, twin
     hits = np.isfinite(rendered[a]) != np.isfinite(rendered[b])
     with np.errstate(invalid="ignore"):
         gap = np.where(hits, np.inf, np.nan_to_num(np.abs(rendered[a] - rendered[b]) / sigma[None], nan=0.0))
-    telling = gap > 1.0  # the wrong pose's expected cost there at least twice the right one's (1 + gap^2 against 1)
-    evidence = np.where(telling, np.minimum(gap**2, RESIDUAL_CAP), 0.0).sum(axis=1)
-    return cost[:, telling.any(axis=0)].sum(axis=1), evidence
+    # At a pixel where the renders differ by one sigma, the wrong pose's expected cost (1 + gap^2) is twice the
+    # right one's; below that a pixel tells little, and its noise would only dilute those that tell much.
+    told = np.where(gap > 1.0, np.minimum(gap**2, RESIDUAL_CAP), 0.0)
+    return (cost * (told.max(axis=0) / RESIDUAL_CAP)[None]).sum(axis=1), told.sum(axis=1)
 
 
 def rival_costs(view: SceneView, rivals: list[tuple[DepthRenderer, np.ndarray]], centre: np.ndarray,
