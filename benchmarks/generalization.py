@@ -32,7 +32,7 @@ from pathlib import Path
 
 import _single_core  # noqa: F401  (must precede numpy)
 import numpy as np
-from generalization_parts import SPLITS, checked_split, class_row, grade, nearest_add, part_info
+from generalization_parts import SPLITS, checked_split, class_row, grade, left_open, nearest_add, part_info
 from generalization_plot import drawn_scene, plot, sketch
 from generalization_report import report
 from tqdm import tqdm
@@ -134,7 +134,7 @@ def run_split(split: str, meshes: dict, paths: dict, args) -> dict:
                                        progress=lambda p: tqdm(p, desc=f"{split}: training", file=sys.stderr))
     train_ms = _training_ms(names, paths, args.units, split) if {"psorr", "orr"} & set(args.methods.split(",")) else {}
     methods = _methods(args.methods.split(","), library, parts)
-    results = {m: {"ms": [], "false": [], "found": [], "add_mm": []} for m in methods}
+    results = {m: {"ms": [], "false": [], "left_open": [], "found": [], "add_mm": []} for m in methods}
     scenes, sketches, start = [], {}, time.perf_counter()
     plan = _scene_plan(names, split, args)
     for kind, shown, seed in tqdm(plan, desc=f"{split}: scenes, every method", file=sys.stderr):
@@ -147,6 +147,7 @@ def run_split(split: str, meshes: dict, paths: dict, args) -> dict:
             found, correct = grade(scene, detections, infos)
             results[method]["found"].append(found)
             results[method]["false"].append(correct.count(False))
+            results[method]["left_open"].append(left_open(scene, detections, found, correct, infos))
             results[method]["add_mm"].append([None if a is None else round(a * 1e3, 1)
                                               for a in nearest_add(scene, detections, infos)])
             if str(kind) not in sketches and method == next(iter(methods)):

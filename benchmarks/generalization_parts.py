@@ -13,7 +13,7 @@ Tune on dev only; report both.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -111,7 +111,25 @@ def grade(scene: MeshScene, detections, infos: dict[str, PartInfo]) -> tuple[lis
     """(found per instance, correct per detection): a detection finds the first instance of its model not
     yet found within a symmetry-aware ADD of ADD_SHARE x the model's diameter; any other detection is
     false, a second report of an instance and a detection of a model not in the scene included."""
+    return grade_instances(scene.instances, detections, infos)
+
+
+def left_open(scene: MeshScene, detections, found: list[bool], correct: list[bool],
+              infos: dict[str, PartInfo]) -> int:
+    """How many of the false ``detections`` name, among their ``alternatives`` (the near-symmetric poses the view
+    left open), a pose that finds an instance no detection found: a tie the recognizer reported as one."""
+    missed = [inst for inst, hit in zip(scene.instances, found) if not hit]
+    count = 0
+    for det, ok in zip(detections, correct):
+        others = [replace(det, T_cloud_model=T, alternatives=()) for T in getattr(det, "alternatives", ())]
+        if not ok and others and any(any(grade_instances(missed, [other], infos)[0]) for other in others):
+            count += 1
+    return count
+
+
+def grade_instances(instances, detections, infos: dict[str, PartInfo]) -> tuple[list[bool], list[bool]]:
+    """:func:`grade` over the given ``instances`` of a scene."""
     def known(name: str):
         info = infos.get(name)
         return None if info is None else (info.samples, info.symmetry, info.diameter)
-    return match_detections(scene.instances, detections, known, ADD_SHARE)
+    return match_detections(instances, detections, known, ADD_SHARE)

@@ -167,11 +167,24 @@ def scenes_lines(data: dict) -> str:
     return "\n".join(lines)
 
 
+def left_open_lines(data: dict, method: str = "psorr") -> str:
+    """Per half: how many of ``method``'s false detections left the true pose open among their alternatives
+    (the near-symmetric poses a view could not rule out: ``Detection.alternatives``)."""
+    lines = []
+    for name, split in data["splits"].items():
+        result = split["methods"].get(method, {})
+        if "left_open" in result:
+            lines.append(f"- {name}: {sum(result['left_open'])} of {sum(result['false'])} false detections")
+    return "\n".join(lines)
+
+
 def report(data: dict) -> str:
     """The whole markdown report."""
     return "\n\n".join([
         scenes_lines(data), methods_table(data),
         "Targets (psorr):", targets_table(data),
+        *(["False detections that name the true pose among their alternatives (twin poses the view left open; "
+           "graded false all the same):", left_open_lines(data)] if left_open_lines(data) else []),
         "Training, one model at a time from its mesh file, no cache (PSORR's and PSG's):", training_lines(data),
         "Recall by size:", sizes_table(data),
         "Recall by class:", classes_table(data), "Per part:", parts_table(data),

@@ -48,6 +48,21 @@ def test_a_pose_off_a_second_report_and_an_absent_model_are_false(graded):
     assert parts.nearest_add(scene, detections, infos)[1] == pytest.approx(0.0, abs=1e-9)
 
 
+def test_a_false_detection_that_left_the_true_pose_open_is_counted_as_such(graded):
+    scene, infos = graded
+    block = scene.instances[1].T_camera_model
+    off = block.copy()
+    off[:3, 3] += (0.0, 0.0, 0.2 * infos["block"].diameter)
+    detections = [Detection("block", off, 0.9, alternatives=(block,)), Detection("block", off, 0.8)]
+    found, correct = parts.grade(scene, detections, infos)
+    assert correct == [False, False]
+    assert parts.left_open(scene, detections, found, correct, infos) == 1
+    # The true pose left open by a detection that is itself right is no tie: nothing is counted.
+    right = [Detection("block", block, 0.9, alternatives=(block,))]
+    found, correct = parts.grade(scene, right, infos)
+    assert parts.left_open(scene, right, found, correct, infos) == 0
+
+
 def _results() -> dict:
     """A hand-made half: one single scene, one clutter scene with a part 20% seen."""
     part_rows = [{"part": "plate", "class": "thin", "size": "50-100 mm"},
