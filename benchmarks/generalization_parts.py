@@ -119,12 +119,9 @@ def left_open(scene: MeshScene, detections, found: list[bool], correct: list[boo
     """How many of the false ``detections`` name, among their ``alternatives`` (the near-symmetric poses the view
     left open), a pose that finds an instance no detection found: a tie the recognizer reported as one."""
     missed = [inst for inst, hit in zip(scene.instances, found) if not hit]
-    count = 0
-    for det, ok in zip(detections, correct):
-        others = [replace(det, T_cloud_model=T, alternatives=()) for T in getattr(det, "alternatives", ())]
-        if not ok and others and any(any(grade_instances(missed, [other], infos)[0]) for other in others):
-            count += 1
-    return count
+    false = [det for det, ok in zip(detections, correct) if not ok]
+    return sum(any(any(grade_instances(missed, [replace(det, T_cloud_model=T, alternatives=())], infos)[0])
+                   for T in getattr(det, "alternatives", ())) for det in false)
 
 
 def grade_instances(instances, detections, infos: dict[str, PartInfo]) -> tuple[list[bool], list[bool]]:

@@ -180,11 +180,12 @@ def left_open_lines(data: dict, method: str = "psorr") -> str:
 
 def report(data: dict) -> str:
     """The whole markdown report."""
+    left_open = left_open_lines(data)
     return "\n\n".join([
         scenes_lines(data), methods_table(data),
         "Targets (psorr):", targets_table(data),
         *(["False detections that name the true pose among their alternatives (twin poses the view left open; "
-           "graded false all the same):", left_open_lines(data)] if left_open_lines(data) else []),
+           "graded false all the same):", left_open] if left_open else []),
         "Training, one model at a time from its mesh file, no cache (PSORR's and PSG's):", training_lines(data),
         "Recall by size:", sizes_table(data),
         "Recall by class:", classes_table(data), "Per part:", parts_table(data),
