@@ -36,6 +36,7 @@ from tqdm import tqdm
 
 from psorr.decomposition.detail import DetailParams
 from psorr.hypotheses.outline import OutlineParams
+from psorr.hypotheses.psg import PsgParams
 from psorr.hypotheses.single_cylinder import SingleCylinderParams
 from psorr.hypotheses.single_plane import SinglePlaneParams
 from psorr.library.models import ModelLibrary
@@ -48,9 +49,9 @@ from psorr.types import PrimitiveKind
 
 ROOT = Path(__file__).resolve().parents[1]
 METHODS = ("psorr", "psg", "cliques")
-# PSG with the stages it shares with PSORR off (single faces and cylinders, outlines, the second look):
-# what the cliques find on their own.
-CLIQUES_ALONE = RecognizeParams(single_plane=SinglePlaneParams(enabled=False),
+# PSG with the stages it shares with PSORR off (the pairs after the cliques, single faces and cylinders,
+# outlines, the second look): what the cliques find on their own.
+CLIQUES_ALONE = RecognizeParams(psg=PsgParams(pairs_after=False), single_plane=SinglePlaneParams(enabled=False),
                                 single_cylinder=SingleCylinderParams(enabled=False),
                                 outline=OutlineParams(enabled=False), detail=DetailParams(fine_voxel=None))
 

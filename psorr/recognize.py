@@ -246,18 +246,18 @@ class Recognizer:
             self._search(cloud, view, fine, tally, table_in_band(fine.primitives, fine.labels, rim))
 
     def _search(self, cloud, view, scene, tally: SearchTally, table: int | None = None) -> None:
-        """Pair rounds (PSORR) or clique matching (PSG), then single faces and long cylinders, over the
-        primitives of the decomposition ``scene`` but the table (its index, or None: the planes too large to be
-        a part's face); what they find, and what it cost, is added to ``tally``."""
+        """Pair rounds (PSORR), or cliques and then pair rounds (PSG), then single faces and long cylinders,
+        over the primitives of the decomposition ``scene`` but the table (its index, or None: the planes too
+        large to be a part's face); what they find, and what it cost, is added to ``tally``."""
         pts, nrm, used = scene_oriented_points(scene.primitives, _TABLE_EXTENT * self.max_diameter, table)
         prims = [scene.primitives[k] for k in used]
         members = [cloud.points[scene.labels == k] for k in used]
         # Primitives no detection explains yet; those an earlier search's detections explain are out.
         open_ = np.array([not self.detected.explain(tally.detections, m) for m in members], dtype=bool)
-        if self.method is Method.PSG:  # the shape graph's cliques in place of the pair rounds
+        if self.method is Method.PSG:  # the shape graph's cliques first; what they leave is paired (decision 0069)
             more = self._cliques(cloud, view, scene, tally, table)
             open_ &= np.array([not self.detected.explain(more, m) for m in members], dtype=bool)
-        else:
+        if self.method is Method.PSORR or (self.params.psg.pairs_after and open_.sum() >= 2):
             open_ = self._pair_rounds(view, pts, nrm, prims, members, open_, tally)
         # A part showing one face, or one long cylinder, gives no pair; matched by size, it still gives
         # poses. Only primitives no detection explains are tried (a cylinder: nor what the faces' detections

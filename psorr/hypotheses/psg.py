@@ -40,9 +40,12 @@ class PsgParams:
     scene cliques agree on (PSORR's vote, on a ``same_place`` grid) are box-scored; those scoring at least
     ``min_box_score`` (with boxes thickened to ``box_thickness`` metres) take part in QPBO; of those it
     keeps, one of each group within ``same_place`` metres (PSORR's vote cell) and the angle tolerance,
-    the ``top`` shared out across models, go on to acceptance."""
+    the ``top`` shared out across models, go on to acceptance. With ``pairs_after``, the primitives the
+    cliques' detections leave unexplained are paired as PSORR pairs them: a part that shows no clique of
+    its model (a board showing its top and one side) is still found (docs/decisions/0069)."""
 
     angle_tolerance: float = 10.0
+    pairs_after: bool = True
     # PSORR's own screening: the same box test, vote cell and number of poses for ICP.
     min_box_score: float = _PAIRS.min_box_score
     box_thickness: float = _PAIRS.box_thickness
@@ -54,6 +57,7 @@ class PsgParams:
         check.positive(self, "angle_tolerance", "box_thickness", "same_place")
         check.within(self, "min_box_score")
         check.whole(self, "top", "max_hypotheses")
+        check.flag(self, "pairs_after")
 
 
 @dataclass(frozen=True, eq=False)

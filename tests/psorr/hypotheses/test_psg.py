@@ -5,10 +5,16 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from psorr.decomposition.detail import DetailParams
 from psorr.hypotheses.cliques import CliqueKind, cylinder_match, cylinder_poses, graph_cliques
 from psorr.hypotheses.corners import CornerIndex
 from psorr.hypotheses.edges import EdgeIndex, EdgeSet
+from psorr.hypotheses.outline import OutlineParams
+from psorr.hypotheses.psg import PsgParams
+from psorr.hypotheses.single_cylinder import SingleCylinderParams
+from psorr.hypotheses.single_plane import SinglePlaneParams
 from psorr.recognize import Recognizer
+from psorr.recognize_params import RecognizeParams
 from psorr.synthetic.catalog import load_catalog, symmetric_add
 from psorr.synthetic.workpiece_scenes import workpiece_scene
 from psorr.types import OrientedBox, PrimitiveKind, PrimitiveShapeGraph
@@ -134,3 +140,24 @@ def test_the_edge_index_finds_the_motion_of_a_moved_model_from_two_faces(library
     # Matches that break a size rule are dropped before any pose is made.
     nothing = index.match(scene, 1.0, allowed=lambda s, o, m: np.zeros(len(s), dtype=bool))
     assert len(nothing.poses) == 0
+
+
+def test_what_no_clique_explains_is_paired(library):
+    """A pipe tee lying on its pipes rests on a line, so the table makes no clique with it and its faces
+    none of their own; the cliques find nothing, and the pair rounds after them find the tee (decision
+    0069). Every other stage is off, so only the cliques and the pairs after them search."""
+    catalog = load_catalog()
+    scene = workpiece_scene(np.random.default_rng(0), {"pipe_tee": catalog["pipe_tee"].load_mesh()}, ["pipe_tee"])
+    model, truth = library.model("pipe_tee"), scene.instances[0].T_camera_model
+
+    def found(pairs_after: bool) -> list:
+        params = RecognizeParams(psg=PsgParams(pairs_after=pairs_after), outline=OutlineParams(enabled=False),
+                                 single_plane=SinglePlaneParams(enabled=False),
+                                 single_cylinder=SingleCylinderParams(enabled=False),
+                                 detail=DetailParams(fine_voxel=None))
+        detections = Recognizer(library, "psg", params).recognize(scene.cloud, np.random.default_rng(0)).detections
+        return [symmetric_add(model.points, d.T_cloud_model, truth, catalog["pipe_tee"]) < 0.1 * model.diameter
+                for d in detections]
+
+    assert found(pairs_after=False) == []
+    assert found(pairs_after=True) == [True]
