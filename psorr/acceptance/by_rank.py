@@ -1,10 +1,13 @@
-"""PSG's candidates accepted rank by rank: each model's best first, then each model's second, and so on.
+"""PSG's candidates accepted one at a time, in the order of the scene surface their poses explain.
 
-A candidate is a clique match, and names the scene primitives it matched. Once a detection of another model
-explains all of them, the candidate's correspondences conflict with that detection's, as two QPBO nodes
-that give one scene primitive to different models' primitives do, and it is not fitted. A candidate of the
-detection's own model is still fitted: a part turned over onto the same faces (a chassis by 180 degrees)
-claims them too, and only the fitted scores tell the two apart.
+A candidate is a clique match, and names the scene primitives it matched. Its rank is QPBO's reward for it:
+the box score times the model's surface, the surface of the scene its pose explains, so a large model's
+pose on its own faces comes before a small model's pose inside them (docs/decisions/0052-psg-matching.md).
+Once a detection of another model explains all of a candidate's primitives, the candidate's correspondences
+conflict with that detection's, as two QPBO nodes that give one scene primitive to different models'
+primitives do, and it is not fitted. A candidate of the detection's own model is still fitted: a part
+turned over onto the same faces (a chassis by 180 degrees) claims them too, and only the fitted scores
+tell the two apart.
 """
 
 from __future__ import annotations
@@ -21,7 +24,7 @@ from psorr.verification.scene_view import SceneView
 def accept_by_rank(acceptance: Acceptance, detected: DetectedSurfaces, view: SceneView, cloud: PointCloud,
                    scene: Decomposition, found: PsgCandidates, claims: PixelClaims) -> list[Detection]:
     """The new detections among ``found`` (the candidates of the cliques of ``scene``, a decomposition of
-    ``cloud``), accepted into ``claims`` a rank at a time; those a later rank displaced are left out."""
+    ``cloud``), accepted into ``claims`` one at a time by rank; those a later one displaced are left out."""
     names = acceptance.library.names
     explained: dict[tuple[int, str], bool] = {}  # (scene primitive, model): explained by another model's detection
     detections: list[Detection] = []
@@ -38,8 +41,10 @@ def accept_by_rank(acceptance: Acceptance, detected: DetectedSurfaces, view: Sce
                 return False
         return True
 
-    for turn in _ranks(found.found.candidates, found.vertices):
-        more = acceptance(view, [c for c, v in turn if not conflicts(c, v)], claims)
+    for candidate, vertices in _ranked(found):
+        if conflicts(candidate, vertices):
+            continue
+        more = acceptance(view, [candidate], claims)
         if more:
             detections += more
             explained = {key: True for key, e in explained.items() if e}  # the new ones may explain more
@@ -47,13 +52,7 @@ def accept_by_rank(acceptance: Acceptance, detected: DetectedSurfaces, view: Sce
     return [d for d in detections if id(d) in standing]
 
 
-def _ranks(candidates, vertices) -> list[list[tuple]]:
-    """(candidate, its vertices) grouped by rank: the k-th group holds each model's k-th candidate, in order."""
-    ranks: list[list[tuple]] = []
-    seen: dict[int, int] = {}
-    for c, v in zip(candidates, vertices, strict=True):
-        rank = seen[c.model] = seen.get(c.model, -1) + 1
-        if rank == len(ranks):
-            ranks.append([])
-        ranks[rank].append((c, v))
-    return ranks
+def _ranked(found: PsgCandidates) -> list[tuple]:
+    """(candidate, its vertices), the most surface explained first (ties in the given order)."""
+    ranked = sorted(zip(found.found.candidates, found.vertices, found.explained, strict=True), key=lambda r: -r[2])
+    return [(c, v) for c, v, _ in ranked]

@@ -63,12 +63,14 @@ class PsgParams:
 @dataclass(frozen=True, eq=False)
 class PsgCandidates:
     """The candidates for acceptance, and QPBO's nodes: how many, and how many it left unlabelled.
-    ``vertices``: per candidate, the scene primitives its clique matched, the table apart."""
+    ``vertices``: per candidate, the scene primitives its clique matched, the table apart; ``explained``: per
+    candidate, the scene surface its pose explains (box score times the model's surface, QPBO's reward)."""
 
     found: CandidateSet
     nodes: int
     unlabelled: int
     vertices: tuple[tuple[int, ...], ...]
+    explained: tuple[float, ...]
 
 
 @dataclass(frozen=True, eq=False)
@@ -120,7 +122,7 @@ class PsgMatcher:
         verify_ms = (time.perf_counter() - start) * 1e3
         chosen = CandidateSet.chosen(found.models, found.poses, order, len(found.poses), verify_ms, scores)
         vertices = tuple(tuple(sorted({n[0] for n in found.nodes[k]} - {found.table})) for k in order)
-        return PsgCandidates(chosen, n_nodes, n_unlabelled, vertices)
+        return PsgCandidates(chosen, n_nodes, n_unlabelled, vertices, tuple(float(explained[k]) for k in order))
 
     def _hypotheses(self, graph: PrimitiveShapeGraph, max_extent: float, table: int | None) -> _Hypotheses:
         graph, table = _table_turned_over(graph, max_extent, table)

@@ -1,5 +1,5 @@
-"""PSG's rank-by-rank acceptance (psorr.acceptance.by_rank), with acceptance and the explained surfaces
-stood in for."""
+"""PSG's acceptance by rank (psorr.acceptance.by_rank): one candidate at a time, the most scene surface
+explained first, with acceptance and the explained surfaces stood in for."""
 
 from types import SimpleNamespace
 
@@ -42,27 +42,28 @@ def _scene():
 
 
 def _found(rows):
-    """rows: (model index, its rank, scene primitives) per candidate, in order; the rank is read off the order,
-    and given here for the reader."""
+    """rows: (model index, the scene surface its pose explains, scene primitives) per candidate."""
     candidates = tuple(Candidate(m, np.eye(4), score=i / 10) for i, (m, _, _) in enumerate(rows))
-    return PsgCandidates(CandidateSet(candidates, len(rows)), 0, 0, tuple(v for _, _, v in rows))
+    return PsgCandidates(CandidateSet(candidates, len(rows)), 0, 0, tuple(v for _, _, v in rows),
+                         tuple(float(e) for _, e, _ in rows))
 
 
-def test_a_later_rank_of_another_model_on_explained_primitives_is_not_fitted():
+def test_candidates_are_fitted_by_the_surface_they_explain_and_not_on_another_models_primitives():
     cloud, scene = _scene()
     acceptance = _Acceptance({"chassis"})
-    found = _found([(0, 0, (0, 1)), (1, 0, (2,)), (0, 1, (0, 1)), (1, 1, (0, 1)), (1, 2, (1, 2))])
+    found = _found([(1, 5, (2,)), (0, 9, (0, 1)), (1, 4, (0, 1)), (0, 6, (0, 1)), (1, 3, (1, 2))])
     claims = SimpleNamespace(detections=[])
     detections = accept_by_rank(acceptance, _Explained(), None, cloud, scene, found, claims)
-    # Rank 0 fits both models' best; rank 1 the chassis's second (its own model), not the bracket on the
-    # chassis's primitives; rank 2 the bracket on a primitive no detection explains.
-    assert acceptance.asked == [[("chassis", 0.0), ("bracket", 0.1)], [("chassis", 0.2)], [("bracket", 0.4)]]
+    # The chassis explaining most goes first; then the chassis's second (its own model may be turned over
+    # onto the same faces), the bracket on a primitive no detection explains, and not the bracket on the
+    # chassis's primitives; then the bracket on primitive 1, explained, and 2, not.
+    assert acceptance.asked == [[("chassis", 0.1)], [("chassis", 0.3)], [("bracket", 0.0)], [("bracket", 0.4)]]
     assert [d.model for d in detections] == ["chassis", "chassis"]
 
 
-def test_with_no_detection_every_rank_is_fitted():
+def test_with_no_detection_every_candidate_is_fitted_and_ties_keep_their_order():
     cloud, scene = _scene()
     acceptance = _Acceptance(set())
-    found = _found([(0, 0, (0, 1)), (1, 0, (0, 1)), (0, 1, (0,)), (1, 1, (1,))])
+    found = _found([(0, 1, (0, 1)), (1, 2, (0, 1)), (0, 1, (0,)), (1, 1, (1,))])
     assert accept_by_rank(acceptance, _Explained(), None, cloud, scene, found, SimpleNamespace(detections=[])) == []
-    assert [len(turn) for turn in acceptance.asked] == [2, 2]
+    assert acceptance.asked == [[("bracket", 0.1)], [("chassis", 0.0)], [("chassis", 0.2)], [("bracket", 0.3)]]
