@@ -30,7 +30,7 @@ from pathlib import Path
 import _single_core  # noqa: F401  (must precede numpy)
 import numpy as np
 import trimesh
-from report_files import write_report
+from psg_report import METHODS, report
 from timing import best_of
 from tqdm import tqdm
 
@@ -48,7 +48,6 @@ from psorr.synthetic.workpiece_scenes import workpiece_scene
 from psorr.types import PrimitiveKind
 
 ROOT = Path(__file__).resolve().parents[1]
-METHODS = ("psorr", "psg", "cliques")
 # PSG with the stages it shares with PSORR off (the pairs after the cliques, single faces and cylinders,
 # outlines, the second look): what the cliques find on their own.
 CLIQUES_ALONE = RecognizeParams(psg=PsgParams(pairs_after=False), single_plane=SinglePlaneParams(enabled=False),
@@ -98,8 +97,8 @@ def library_and_meshes(folder: Path):
     return ModelLibrary.from_meshes(paths), meshes
 
 
-def _detections(recognizer: Recognizer, cloud) -> tuple:
-    return recognizer.recognize(cloud, np.random.default_rng(0)).detections
+def _recognition(recognizer: Recognizer, cloud):
+    return recognizer.recognize(cloud, np.random.default_rng(0))
 
 
 def run(seeds: int, repeats: int) -> list[dict]:
@@ -115,51 +114,23 @@ def run(seeds: int, repeats: int) -> list[dict]:
             row = {"model": name, "planes": sum(p.kind is PrimitiveKind.PLANE for p in graph.primitives),
                    "cylinders": sum(p.kind is PrimitiveKind.CYLINDER for p in graph.primitives)}
             for method in METHODS:
-                row[method] = {"found": 0, "false": 0, "ms": []}
+                row[method] = {"found": 0, "false": 0, "ms": [], "searched": []}
             for seed in range(seeds):
                 scene = workpiece_scene(np.random.default_rng(500 + seed), meshes, [name])
                 for method, recognizer in recognizers.items():
-                    detections, ms = best_of(repeats if method != "cliques" else 1, partial(
-                        _detections, recognizer, scene.cloud))
+                    recognition, ms = best_of(repeats if method != "cliques" else 1, partial(
+                        _recognition, recognizer, scene.cloud))
                     row[method]["ms"].append(ms)
-                    found, correct = match_detections(scene.instances, detections, known.get)
+                    # Decomposed: the method's own search ran; else the resting-pose trial, which both share,
+                    # settled the scene (docs/decisions/0066-resting-poses-first.md).
+                    row[method]["searched"].append(recognition.stats.decomposition_ms > 0)
+                    found, correct = match_detections(scene.instances, recognition.detections, known.get)
                     row[method]["found"] += sum(found)
                     row[method]["false"] += correct.count(False)
                 bar.update()
             row["seeds"] = seeds
             rows.append(row)
     return rows
-
-
-def report(rows: list[dict], out: Path) -> None:
-    rows = sorted(rows, key=lambda r: (r["planes"] + r["cylinders"], r["model"]))
-    lines = ["PSG matching against PSORR, each model alone, a library of 10 models, 1 core", "",
-             "| model | planes | cylinders | PSORR found | PSORR ms (median / mean) | PSG found | PSG false "
-             "| PSG ms (median / mean) | cliques alone found |", "|---|---|---|---|---|---|---|---|---|"]
-    for r in rows:
-        a, b = r["psorr"], r["psg"]
-        lines.append(f"| {r['model']} | {r['planes']} | {r['cylinders']} | {a['found']}/{r['seeds']} | "
-                     f"{np.median(a['ms']):.0f} / {np.mean(a['ms']):.0f} | {b['found']}/{r['seeds']} | {b['false']} | "
-                     f"{np.median(b['ms']):.0f} / {np.mean(b['ms']):.0f} | {r['cliques']['found']}/{r['seeds']} |")
-    total = {m: sum(r[m]["found"] for r in rows) for m in METHODS}
-    n = sum(r["seeds"] for r in rows)
-    # Time only counts where PSG finds the model as often as PSORR: finding nothing is quick.
-    both = [r for r in rows if r["psg"]["found"] >= r["psorr"]["found"]]
-    # Faster by the mean over the model's scenes, what a run of many scenes pays: of 4 scenes, medians fell
-    # within a few milliseconds of each other on the largest models, and which was lower changed run to run.
-    faster = [r["model"] for r in both if np.mean(r["psg"]["ms"]) < np.mean(r["psorr"]["ms"])]
-    size = {r["model"]: r["planes"] + r["cylinders"] for r in both}
-    # The fewest primitives from which on PSG is faster on every such model.
-    crossover = min((c for c in size.values() if all(m in faster for m in size if size[m] >= c)), default=None)
-    verdicts = [f"recall: PSORR {total['psorr']}/{n}, PSG {total['psg']}/{n}, PSG's cliques alone "
-                f"{total['cliques']}/{n} ({sum(r['cliques']['false'] for r in rows)} false)",
-                f"PSG finds {len(both)} of {len(rows)} models as often as PSORR "
-                f"({', '.join(r['model'] for r in both) or 'none'}); of those it is faster (mean time) on "
-                f"{', '.join(faster) or 'none'}",
-                "no crossover: PSG is not the faster method on the largest model it finds as often" if crossover is None
-                else f"crossover: PSG is the faster from {crossover} primitives on, on the models it finds as often"]
-    lines += ["", *[f"- {v}" for v in verdicts]]
-    write_report(out, "psg", lines, {"rows": rows, "verdicts": verdicts})
 
 
 def main(argv=None) -> int:

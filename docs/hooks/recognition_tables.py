@@ -236,12 +236,16 @@ def psg() -> str:
     rows = []
     for r in data["rows"]:
         a, b = r["psorr"], r["psg"]
+        own = r["searched_mean_ms"]
         rows.append([r["model"], str(r["planes"]), str(r["cylinders"]), f"{a['found']}/{r['seeds']}",
                      _median_mean(a["ms"]), f"{b['found']}/{r['seeds']}", str(b["false"]),
-                     _median_mean(b["ms"]), f"{r['cliques']['found']}/{r['seeds']}"])
+                     _median_mean(b["ms"]), f"{len(r['searched_scenes'])}/{r['seeds']}",
+                     f"{own['psorr']:.0f} / {own['psg']:.0f}" if own else "the same code",
+                     f"{r['cliques']['found']}/{r['seeds']}"])
     verdicts = "\n".join(f"- {v}" for v in data["verdicts"])
     return table(["model", "planes", "cylinders", "PSORR found", "PSORR ms (median / mean)", "PSG found", "PSG false",
-                  "PSG ms (median / mean)", "cliques alone found"], rows, "lrrrrrrrr") + "\n\n" + verdicts
+                  "PSG ms (median / mean)", "searched", "PSORR / PSG mean ms, searched", "cliques alone found"], rows,
+                 "lrrrrrrrrrr") + "\n\n" + verdicts
 
 
 def _median_mean(ms: list) -> str:
