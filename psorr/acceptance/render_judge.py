@@ -12,9 +12,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from psorr.acceptance.ambiguity import FEATURES_SHOW
 from psorr.verification.depth_compare import RESIDUAL_CAP, DepthRenderer, rival_costs
 from psorr.verification.scene_view import SceneView
+
+# A verdict needs a cost difference beyond what noise makes on the pixels that tell the two apart: the
+# capped squared residual of a pixel on a rendered surface is about chi-square with one degree of freedom,
+# so a sum over n pixels spreads by sqrt(2n); two spreads, and never less than one pixel's whole cap.
+DECISIVE_SPREADS = 2.0
 
 
 class RenderJudge:
@@ -35,14 +39,9 @@ class RenderJudge:
             radii.append(radius)
         middle = 0.5 * (centres[0] + centres[1])
         reach = 0.5 * float(np.linalg.norm(centres[0] - centres[1])) + max(radii)
-        costs, evidence = rival_costs(self.view, [(self.renderers[model_a], T_a), (self.renderers[model_b], T_b)],
-                                      middle, reach)
-        # As for a model's twins (docs/decisions/0068): the features that tell the two apart show when their
-        # evidence E is three noises (2 sqrt(E)) above zero; the measured difference must then exceed one noise,
-        # and one pixel's whole cap, so that no pixel or two decide.
-        if evidence < FEATURES_SHOW:
-            return 0
-        margin = max(RESIDUAL_CAP, 2.0 * np.sqrt(evidence))
+        costs, n = rival_costs(self.view, [(self.renderers[model_a], T_a), (self.renderers[model_b], T_b)],
+                               middle, reach)
+        margin = max(RESIDUAL_CAP, DECISIVE_SPREADS * np.sqrt(2.0 * n))
         if costs[1] - costs[0] > margin:
             return 1
         if costs[0] - costs[1] > margin:

@@ -14,15 +14,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from psorr.acceptance.render_judge import DECISIVE_SPREADS
 from psorr.sensing.kinect_noise import KINECT_V1
 from psorr.verification.depth_compare import RESIDUAL_CAP, DepthRenderer, table_costs
 from psorr.verification.point_check import CheckParams, PoseCheck, depth_tolerance
 from psorr.verification.scene_view import SceneView
-
-# The part beats the bare table when its cost is lower by more than noise makes on the pixels where it is
-# rendered: the capped squared residual of a pixel on a rendered surface is about chi-square with one degree
-# of freedom, so a sum over n pixels spreads by sqrt(2n); two spreads, and never less than one pixel's cap.
-DECISIVE_SPREADS = 2.0
 
 # Disparity steps the pose's face must stand above the table for the sensor to tell them apart at all.
 RESOLVABLE_STEPS = 1.0
