@@ -121,7 +121,7 @@ def left_open(scene: MeshScene, detections, found: list[bool], correct: list[boo
     missed = [inst for inst, hit in zip(scene.instances, found) if not hit]
     false = [det for det, ok in zip(detections, correct) if not ok]
     return sum(any(any(grade_instances(missed, [replace(det, T_cloud_model=T, alternatives=())], infos)[0])
-                   for T in getattr(det, "alternatives", ())) for det in false)
+                   for T in det.alternatives) for det in false)
 
 
 def grade_instances(instances, detections, infos: dict[str, PartInfo]) -> tuple[list[bool], list[bool]]:
