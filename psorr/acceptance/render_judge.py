@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from psorr.acceptance.ambiguity import FEATURES_SHOW
 from psorr.verification.depth_compare import RESIDUAL_CAP, DepthRenderer, rival_costs
 from psorr.verification.scene_view import SceneView
 
@@ -39,8 +40,12 @@ class RenderJudge:
             radii.append(radius)
         middle = 0.5 * (centres[0] + centres[1])
         reach = 0.5 * float(np.linalg.norm(centres[0] - centres[1])) + max(radii)
-        costs, n = rival_costs(self.view, [(self.renderers[model_a], T_a), (self.renderers[model_b], T_b)],
-                               middle, reach)
+        costs, n, evidence = rival_costs(self.view, [(self.renderers[model_a], T_a),
+                                                     (self.renderers[model_b], T_b)], middle, reach)
+        # A verdict also needs the features that tell the two apart to show, as for a model's twins (decision
+        # 0068): one pixel at 3 sigmas and another at 1.5 could otherwise decide (decision 0061).
+        if evidence < FEATURES_SHOW:
+            return 0
         margin = max(RESIDUAL_CAP, DECISIVE_SPREADS * np.sqrt(2.0 * n))
         if costs[1] - costs[0] > margin:
             return 1

@@ -117,27 +117,37 @@ def twin_costs(view: SceneView, renderer: DepthRenderer, poses: np.ndarray, twin
         return np.zeros(len(poses)), np.zeros(len(twins))
     cost, rendered, sigma = window
     a, b = np.array(twins).T
-    hits = np.isfinite(rendered[a]) != np.isfinite(rendered[b])
-    with np.errstate(invalid="ignore"):
-        gap = np.where(hits, np.inf, np.nan_to_num(np.abs(rendered[a] - rendered[b]) / sigma[None], nan=0.0))
-    # At a pixel where the renders differ by one sigma, the wrong pose's expected cost (1 + gap^2) is twice the
-    # right one's; below that a pixel tells little, and its noise would only dilute those that tell much.
-    told = np.where(gap > 1.0, np.minimum(gap**2, RESIDUAL_CAP), 0.0)
+    told = _told(rendered[a], rendered[b], sigma)
     return (cost * (told.max(axis=0) / RESIDUAL_CAP)[None]).sum(axis=1), told.sum(axis=1)
 
 
+def _told(rendered: np.ndarray, other: np.ndarray, sigma: np.ndarray) -> np.ndarray:
+    """(K, P) what each pixel tells between the depths ``rendered`` (K or 1, P) and ``other`` (K, P): the
+    squared gap in the sensor's ``sigma`` (P,), capped as a residual is, where it exceeds one sigma (or where
+    one render hits the model and the other does not); 0 elsewhere."""
+    hits = np.isfinite(rendered) != np.isfinite(other)
+    with np.errstate(invalid="ignore"):
+        gap = np.where(hits, np.inf, np.nan_to_num(np.abs(rendered - other) / sigma[None], nan=0.0))
+    # At a pixel where the renders differ by one sigma, the wrong pose's expected cost (1 + gap^2) is twice the
+    # right one's; below that a pixel tells little, and its noise would only dilute those that tell much.
+    return np.where(gap > 1.0, np.minimum(gap**2, RESIDUAL_CAP), 0.0)
+
+
 def rival_costs(view: SceneView, rivals: list[tuple[DepthRenderer, np.ndarray]], centre: np.ndarray,
-                radius: float) -> tuple[np.ndarray, int]:
+                radius: float) -> tuple[np.ndarray, int, float]:
     """(K,) cost of each of K ``rivals`` (a model's renderer and its pose ``T_cloud_model``; different models
     may compete), as :func:`residual_costs`, over the pixels around the sphere (``centre``, ``radius``) where
-    some rival renders differently from the first; and how many pixels those are."""
+    some rival renders differently from the first; how many pixels those are; and the evidence, as in
+    :func:`twin_costs`: the capped squared gaps, in sigmas, between the renders summed over the pixels where
+    some rival differs from the first by more than one sigma."""
     window = _window_costs(view, centre, radius,
                            lambda rays: np.vstack([r.depth(T[None], rays) for r, T in rivals]))
     if window is None:
-        return np.zeros(len(rivals)), 0
+        return np.zeros(len(rivals)), 0, 0.0
     cost, rendered, sigma = window
     telling = differs(rendered, rendered[:1], sigma).any(axis=0)
-    return cost[:, telling].sum(axis=1), int(telling.sum())
+    evidence = float(_told(rendered[:1], rendered[1:], sigma).max(axis=0).sum())
+    return cost[:, telling].sum(axis=1), int(telling.sum()), evidence
 
 
 def table_costs(view: SceneView, renderer: DepthRenderer, T_cloud_model: np.ndarray, centre: np.ndarray,

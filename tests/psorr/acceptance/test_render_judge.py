@@ -50,3 +50,27 @@ def test_two_renders_that_agree_get_no_verdict():
     assert judge.prefer("long", T, "long", T) == 0
     turned = T @ np.diag([-1.0, -1.0, 1.0, 1.0])  # a half turn about its height: the block's own symmetry
     assert judge.prefer("long", turned, "long", T) == 0
+
+
+
+# LONG with a notch 2 mm deep and 2 mm long across one end of its top: about a sensor sigma deep at
+# 0.6-1.0 m, and a pixel or two wide.
+NOTCHED = trimesh.boolean.difference(
+    [LONG, trimesh.creation.box(extents=(0.002, 0.06, 0.004), transform=trimesh.transformations.translation_matrix(
+        (0.04, 0.0, 0.01)))], engine="manifold")
+
+
+@pytest.mark.parametrize(("seed", "verdict"), [(5, 0), (3, 1)])
+def test_a_verdict_needs_the_feature_to_show_over_more_than_a_pixel_or_two(seed, verdict):
+    """Seed 5 shows the notch in two pixels that differ by 3 sigmas: one noisy pixel could decide, so the
+    judge does not (docs/decisions/0061). Seed 3 shows it over five or six, enough to tell the block it is
+    from the notched one."""
+    scene = mesh_scene(np.random.default_rng(seed), {"long": LONG}, "single", names=["long"])
+    T = scene.instances[0].T_camera_model
+    meshes = {"long": LONG, "notched": NOTCHED}
+    renderers = {n: DepthRenderer(m.vertices, m.faces) for n, m in meshes.items()}
+    spheres = {n: (np.asarray(m.vertices).mean(axis=0), 0.5 * float(np.linalg.norm(m.extents))) for n, m in
+               meshes.items()}
+    judge = RenderJudge(SceneView(scene.cloud), renderers, spheres)
+    assert judge.prefer("long", T, "notched", T) == verdict
+    assert judge.prefer("notched", T, "long", T) == -verdict
