@@ -30,6 +30,7 @@ from psorr.types import (
     Primitive,
     PrimitiveKind,
     PrimitiveShapeGraph,
+    Rival,
 )
 
 __all__ = [
@@ -57,6 +58,7 @@ __all__ = [
     "RecognitionStats",
     "RecognizeParams",
     "Recognizer",
+    "Rival",
     "SegmentParams",
     "Segmentation",
     "SingleCylinderParams",

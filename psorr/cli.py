@@ -104,8 +104,8 @@ def _recognize(args) -> int:
         _log(f"wrote overlay to {args.png}")
     if args.json:
         print(json.dumps({
-            "detections": [{"model": d.model, "pose": [[float(v) for v in row] for row in d.T_cloud_model],
-                            "score": float(d.score), **_colour_record(d)} for d in result.detections],
+            "detections": [{"model": d.model, "pose": _pose_record(d.T_cloud_model), "score": float(d.score),
+                            **_colour_record(d), **_left_open_record(d)} for d in result.detections],
             "stats": {"method": stats.method, "hypotheses": int(stats.hypotheses),
                       "verify_ms_per_hypothesis": float(stats.verify_ms_per_hypothesis),
                       "total_ms": float(stats.total_ms), "train_ms": float(stats.train_ms),
@@ -117,7 +117,8 @@ def _recognize(args) -> int:
         for d in result.detections:
             where = " ".join(f"{v:+.3f}" for v in d.T_cloud_model[:3, 3])
             colour = f"  {d.colour.name}" if d.colour else ""
-            print(f"{d.model:<16} {d.score:>6.3f} {d.visible_fraction:>5.2f}  {where}{colour}")
+            rivals = "".join(f"  (or {r.model}, {r.score:.3f})" for r in d.rivals)
+            print(f"{d.model:<16} {d.score:>6.3f} {d.visible_fraction:>5.2f}  {where}{colour}{rivals}")
         print(f"{len(result.detections)} detections; {stats.method}: {stats.hypotheses} hypotheses, "
               f"{stats.verify_ms_per_hypothesis:.2f} ms verification each, {stats.total_ms:.0f} ms in all")
     return 0
@@ -128,6 +129,22 @@ def _colour_record(detection) -> dict:
     if detection.colour is None:
         return {}
     return {"colour": detection.colour.name, "mean_rgb": [round(v, 4) for v in detection.colour.mean_rgb]}
+
+
+def _pose_record(T: np.ndarray) -> list[list[float]]:
+    return [[float(v) for v in row] for row in T]
+
+
+def _left_open_record(detection) -> dict:
+    """The JSON fields of what the view left open: twin poses, and other models' poses (rivals); none if
+    it settled both."""
+    record = {}
+    if detection.alternatives:
+        record["alternatives"] = [_pose_record(T) for T in detection.alternatives]
+    if detection.rivals:
+        record["rivals"] = [{"model": r.model, "pose": _pose_record(r.T_cloud_model), "score": float(r.score)}
+                            for r in detection.rivals]
+    return record
 
 
 def build_parser() -> argparse.ArgumentParser:

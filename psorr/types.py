@@ -238,6 +238,25 @@ class DetectionColour:
 
 
 @dataclass(frozen=True, eq=False)
+class Rival:
+    """Another library ``model``'s pose ``T_cloud_model`` (4, 4: model metres into the cloud's frame) over a
+    detection's pixels that the view could not rule out: rendered, the two agree with the measured depth
+    alike (a cable clip and its variant for a thicker sleeve differ inside a channel the sensor does not
+    see into). ``score`` in [0, 1], as :attr:`Detection.score`; the detection kept is the better by it."""
+
+    model: str
+    T_cloud_model: np.ndarray
+    score: float
+
+    def __post_init__(self):
+        object.__setattr__(self, "T_cloud_model", rigid_pose(self.T_cloud_model, "Rival.T_cloud_model"))
+        score = float(self.score)
+        if not 0.0 <= score <= 1.0:
+            raise InvalidInputError(f"Rival.score must lie in [0, 1], got {score}")
+        object.__setattr__(self, "score", score)
+
+
+@dataclass(frozen=True, eq=False)
 class Detection:
     """One recognised workpiece instance.
 
@@ -254,6 +273,7 @@ class Detection:
             (``Recognizer.refine`` judges given poses in a new view).
         colour: with ``Recognizer(..., use_colour=True)``, the colour of the segment it was found in;
             otherwise None.
+        rivals: other models' poses over its pixels that the view could not rule out (:class:`Rival`).
     """
 
     model: str
@@ -262,9 +282,14 @@ class Detection:
     visible_fraction: float = 0.0
     alternatives: tuple = ()
     colour: DetectionColour | None = None
+    rivals: tuple[Rival, ...] = ()
 
     def __post_init__(self):
         object.__setattr__(self, "T_cloud_model", rigid_pose(self.T_cloud_model, "Detection.T_cloud_model"))
+        rivals = tuple(self.rivals)
+        if not all(isinstance(r, Rival) for r in rivals):
+            raise InvalidInputError("Detection.rivals holds psorr.Rival values (a model's name, pose and score)")
+        object.__setattr__(self, "rivals", rivals)
         object.__setattr__(self, "alternatives", tuple(rigid_pose(P, f"Detection.alternatives[{k}]")
                                                        for k, P in enumerate(self.alternatives)))
         for name in ("score", "visible_fraction"):

@@ -203,6 +203,7 @@ class Acceptance:
         posed = Detection(f.model.name, f.T_cloud_model, c.score)
         displaced = claims.rivals(c.supported_blocks, c.score, 1 - c.violation_ratio, posed)
         if displaced is None and not self._second_chance(f, resolved_from):
+            claims.lost_tie(posed, c.score)
             return None
         resolved_from.append((f.model, f.T_cloud_model))
         detection = self._resolved(view, f.model, f.T_cloud_model)
@@ -210,6 +211,7 @@ class Acceptance:
             c = check_pose(view, f.model.points, f.model.normals, detection.T_cloud_model, self.params.check)
             displaced = claims.rivals(c.supported_blocks, c.score, 1 - c.violation_ratio, detection)
             if displaced is None:
+                claims.lost_tie(detection, c.score)
                 return None
         return Claim(detection, c, displaced)
 

@@ -15,11 +15,11 @@ tell the two apart do the scores and pixel counts below decide.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
-from psorr.types import Detection
+from psorr.types import Detection, Rival
 from psorr.viz.observer import observer
 
 _CLEARLY_MORE = 1.25  # a candidate explains more than a detection it covers only by this factor
@@ -38,7 +38,8 @@ class PixelClaims:
     (_CLEARLY_MORE times), each weighted by how clean the detection is: the share of its checked
     points that the sensor does not see through. With a ``judge`` (``prefer(model_a, T_a, model_b, T_b)``
     giving 1, -1 or 0), its verdict on the candidate's pose against the rival's comes before all of these,
-    whenever it gives one.
+    whenever it gives one. When it gives none between two models' poses that hold most of each other's
+    blocks, the one kept reports the other as a :class:`~psorr.types.Rival` (:meth:`reported`).
     """
 
     def __init__(self, n_blocks: int, max_shared: float, judge=None):
@@ -47,11 +48,25 @@ class PixelClaims:
         self.judge = judge
         self._entries: list[tuple[float, Detection, float] | None] = []  # score, detection, weight
         self._blocks: list[np.ndarray] = []  # each entry's supported blocks, held or not
+        self._rivals: list[list[Rival]] = []  # each entry's rivals the judge could not tell it from
+        self.ties: list[int] = []  # the entries the last rivals() call tied with: another model, the same pixels
 
     @property
     def detections(self) -> list[Detection]:
         """The detections that stand, in the order they were accepted."""
         return [e[1] for e in self._entries if e is not None]
+
+    def reported(self) -> list[Detection]:
+        """:attr:`detections`, each with the rivals the view could not rule out."""
+        return [replace(e[1], rivals=tuple(rivals)) if rivals else e[1]
+                for e, rivals in zip(self._entries, self._rivals) if e is not None]
+
+    def lost_tie(self, candidate: Detection, score: float) -> None:
+        """Report ``candidate`` (with ``score``), turned away after the last :meth:`rivals` call, as a rival of
+        the detections it tied with there."""
+        for rival in self.ties:
+            if self._entries[rival] is not None:
+                _keep_best(self._rivals[rival], Rival(candidate.model, candidate.T_cloud_model, score))
 
     def rivals(self, blocks: np.ndarray, score: float, clean: float | None = None,
                candidate: Detection | None = None) -> list[int] | None:
@@ -60,6 +75,7 @@ class PixelClaims:
         conflicts with none, None if it loses to one of them. ``candidate`` (its model and pose) is what
         the judge compares, if there is one."""
         blocks = np.unique(blocks)
+        self.ties = []
         weight = _weight(score, clean, len(blocks))
         held = self.owner[blocks]
         held = held[held >= 0]
@@ -74,7 +90,7 @@ class PixelClaims:
                 if remaining <= self.max_shared * len(blocks):
                     break
                 rival = int(owners[k])
-                verdict = self._verdict(candidate, rival)
+                verdict = self._verdict(candidate, rival, blocks, covered)
                 if verdict < 0 or verdict == 0 and not (
                         self._entries[rival][0] < score
                         or self._covers(rival, covered) and self._explains_clearly_more(rival, weight)):
@@ -90,18 +106,25 @@ class PixelClaims:
                 # more, blocks weighted by score, stays. By score alone a bracket posed on a chassis' wall
                 # (0.71 of it seen, 57 blocks) dropped the true chassis (0.48, 180 blocks) in a 1280x720 view.
                 explains_more = entry[0] * len(own) < score * len(blocks)
-                verdict = self._verdict(candidate, rival)
+                verdict = self._verdict(candidate, rival, blocks, covered)
                 if verdict < 0 or verdict == 0 and not (explains_more or self._explains_clearly_more(rival, weight)):
                     return None
                 displaced.append(rival)
         return displaced
 
-    def _verdict(self, candidate: Detection | None, rival: int) -> int:
-        """The judge's verdict on ``candidate`` against the ``rival`` detection: 1, -1, or 0 (none)."""
+    def _verdict(self, candidate: Detection | None, rival: int, blocks: np.ndarray, covered: np.ndarray) -> int:
+        """The judge's verdict on ``candidate`` (its ``blocks``, and ``covered`` marking them) against the
+        ``rival`` detection: 1, -1, or 0 (none). No verdict between two models' poses that hold most of each
+        other's blocks is a tie, noted in :attr:`ties`."""
         if self.judge is None or candidate is None:
             return 0
         held = self._entries[rival][1]
-        return self.judge.prefer(candidate.model, candidate.T_cloud_model, held.model, held.T_cloud_model)
+        verdict = self.judge.prefer(candidate.model, candidate.T_cloud_model, held.model, held.T_cloud_model)
+        if verdict == 0 and candidate.model != held.model:
+            shared = covered[self._blocks[rival]].sum()
+            if shared > self.max_shared * max(len(blocks), len(self._blocks[rival])):
+                self.ties.append(rival)
+        return verdict
 
     def _covers(self, rival: int, covered: np.ndarray) -> bool:
         """Do the ``covered`` blocks (a candidate's) hold more than ``max_shared`` of the rival's own?"""
@@ -120,11 +143,15 @@ class PixelClaims:
             clean: float | None = None) -> None:
         """Accept ``detection``: drop the ``displaced`` (from :meth:`rivals`), and give it ``blocks`` no one
         holds; ``score`` and ``clean`` as for :meth:`rivals`."""
+        tied: list[Rival] = []
         for rival in displaced:
             held = self._entries[rival][1]
+            if rival in self.ties:
+                _keep_best(tied, Rival(held.model, held.T_cloud_model, self._entries[rival][0]))
             observer().rejected(held.model, held.T_cloud_model, "displaced by a better detection")
             self.owner[self.owner == rival] = -1
             self._entries[rival] = None
+        self._rivals.append(tied)
         index = len(self._entries)
         self._blocks.append(np.unique(blocks))
         self._entries.append((score, detection, _weight(score, clean, len(self._blocks[-1]))))
@@ -167,10 +194,20 @@ class SearchTally:
         self.verify_ms += verify_ms
 
     def result(self) -> SearchResult:
-        return SearchResult(tuple(self.detections), self.hypotheses, self.verify_ms, self.decomposition_ms,
+        return SearchResult(tuple(self.claims.reported()), self.hypotheses, self.verify_ms, self.decomposition_ms,
                             self.qpbo_nodes, self.qpbo_unlabelled)
 
 
 def _weight(score: float, clean: float | None, n_blocks: int) -> float:
     """Blocks weighted by how clean a pose is (its score when ``clean`` is None): what it explains."""
     return (score if clean is None else clean) * n_blocks
+
+
+def _keep_best(rivals: list[Rival], rival: Rival) -> None:
+    """Add ``rival`` to ``rivals``, which hold one pose per model: its best by score."""
+    for k, held in enumerate(rivals):
+        if held.model == rival.model:
+            if rival.score > held.score:
+                rivals[k] = rival
+            return
+    rivals.append(rival)

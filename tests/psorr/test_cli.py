@@ -238,3 +238,15 @@ def test_recognize_with_method_psg_finds_a_single_chassis(tmp_path):
     found = np.array(record["detections"][0]["pose"])
     assert np.linalg.norm(found[:3, 3] - scene.instances[0].T_camera_model[:3, 3]) < 0.005
     assert record["stats"]["method"] == "psg" and record["stats"]["qpbo_nodes"] > 0
+
+
+def test_the_json_record_of_a_detection_holds_what_the_view_left_open():
+    from psorr.cli import _left_open_record
+    from psorr.types import Detection, Rival
+
+    turned = np.diag([-1.0, -1.0, 1.0, 1.0])
+    detection = Detection("clip", np.eye(4), 0.8, alternatives=(turned,), rivals=(Rival("clip_8mm", np.eye(4), 0.7),))
+    record = json.loads(json.dumps(_left_open_record(detection)))
+    assert record["alternatives"] == [turned.tolist()]
+    assert record["rivals"] == [{"model": "clip_8mm", "pose": np.eye(4).tolist(), "score": 0.7}]
+    assert _left_open_record(Detection("clip", np.eye(4), 0.8)) == {}

@@ -99,3 +99,16 @@ def test_a_plate_thinner_than_the_depth_tolerance_lying_flat_is_found(tmp_path):
         detections = recognizer.recognize(scene.cloud, np.random.default_rng(0)).detections
         found, correct = match_detections(scene.instances, detections, known.__getitem__)
         assert found == [True] and correct.count(False) == 0, seed
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_two_part_numbers_of_one_shape_are_reported_as_each_others_rival(tmp_path, seed):
+    # The same bar under two names (one shape in two materials, say): no view tells them apart, so the
+    # detection names the other as its rival, at the same pose, rather than pretending to know.
+    parts = {"bar": PARTS["bar"], "bar_in_steel": PARTS["bar"].copy(), "roller": PARTS["roller"]}
+    recognizer = Recognizer(trained_library(parts, tmp_path))
+    scene = mesh_scene(np.random.default_rng(seed), {"bar": PARTS["bar"]}, "single", names=["bar"])
+    [detection] = recognizer.recognize(scene.cloud, np.random.default_rng(0)).detections
+    assert {detection.model} | {r.model for r in detection.rivals} == {"bar", "bar_in_steel"}
+    [rival] = detection.rivals
+    assert np.linalg.norm(rival.T_cloud_model[:3, 3] - detection.T_cloud_model[:3, 3]) < 0.005

@@ -130,3 +130,43 @@ def test_a_displaced_detection_is_reported_with_its_reason_whichever_search_foun
         displaced = claims.rivals(np.arange(0, 15), 0.81)
         claims.add(_detection("board", 0.81), np.arange(0, 15), 0.81, displaced)
     assert spy.rejected_models == [("bracket", "displaced by a better detection")]
+
+
+def test_two_models_the_judge_cannot_tell_apart_on_the_same_pixels_report_each_other_as_rivals():
+    clip, variant = _detection("clip", 0.85), _detection("clip_for_sleeve", 0.83)
+    claims = PixelClaims(100, max_shared=0.3, judge=_Judge(None))
+    claims.add(clip, np.arange(0, 20), 0.85, [])
+    assert claims.rivals(np.arange(0, 20), 0.83, candidate=variant) is None  # the score keeps the clip
+    claims.lost_tie(variant, 0.83)
+    [reported] = claims.reported()
+    assert reported.model == "clip" and [(r.model, r.score) for r in reported.rivals] == [("clip_for_sleeve", 0.83)]
+    assert claims.detections == [clip]  # what the search works with is unchanged
+    # The other way round, the variant found second with the higher score displaces the clip, and names it.
+    claims = PixelClaims(100, max_shared=0.3, judge=_Judge(None))
+    claims.add(variant, np.arange(0, 20), 0.83, [])
+    displaced = claims.rivals(np.arange(0, 20), 0.85, candidate=clip)
+    claims.add(clip, np.arange(0, 20), 0.85, displaced)
+    [reported] = claims.reported()
+    assert reported.model == "clip" and [r.model for r in reported.rivals] == ["clip_for_sleeve"]
+
+
+def test_no_rival_where_the_judge_decides_or_the_pixels_are_not_the_same():
+    clip, variant = _detection("clip", 0.85), _detection("clip_for_sleeve", 0.83)
+    # The judge prefers the clip: the view told them apart.
+    claims = PixelClaims(100, max_shared=0.3, judge=_Judge("clip"))
+    claims.add(clip, np.arange(0, 20), 0.85, [])
+    assert claims.rivals(np.arange(0, 20), 0.83, candidate=variant) is None
+    claims.lost_tie(variant, 0.83)
+    assert claims.reported()[0].rivals == ()
+    # A small part whose pixels lie inside a large one's is no alternative to it, whoever keeps them.
+    claims = PixelClaims(100, max_shared=0.3, judge=_Judge(None))
+    claims.add(_detection("board", 0.9), np.arange(0, 40), 0.9, [])
+    assert claims.rivals(np.arange(0, 10), 0.8, candidate=variant) is None
+    claims.lost_tie(variant, 0.8)
+    assert claims.reported()[0].rivals == ()
+    # Two poses of one model are its near-symmetric twins' business (Detection.alternatives), not rivals.
+    claims = PixelClaims(100, max_shared=0.3, judge=_Judge(None))
+    claims.add(clip, np.arange(0, 20), 0.85, [])
+    assert claims.rivals(np.arange(0, 20), 0.8, candidate=_detection("clip", 0.8)) is None
+    claims.lost_tie(_detection("clip", 0.8), 0.8)
+    assert claims.reported()[0].rivals == ()
