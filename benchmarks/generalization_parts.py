@@ -117,11 +117,19 @@ def grade(scene: MeshScene, detections, infos: dict[str, PartInfo]) -> tuple[lis
 def left_open(scene: MeshScene, detections, found: list[bool], correct: list[bool],
               infos: dict[str, PartInfo]) -> int:
     """How many of the false ``detections`` name, among their ``alternatives`` (the near-symmetric poses the view
-    left open), a pose that finds an instance no detection found: a tie the recognizer reported as one."""
+    left open) or their ``rivals`` (other models' poses it left open), a pose that finds an instance no
+    detection found: a tie the recognizer reported as one."""
     missed = [inst for inst, hit in zip(scene.instances, found) if not hit]
     false = [det for det, ok in zip(detections, correct) if not ok]
-    return sum(any(any(grade_instances(missed, [replace(det, T_cloud_model=T, alternatives=())], infos)[0])
-                   for T in det.alternatives) for det in false)
+    return sum(any(any(grade_instances(missed, [replace(det, model=model, T_cloud_model=T, alternatives=(),
+                                                        rivals=())], infos)[0])
+                   for model, T in _left_open_poses(det)) for det in false)
+
+
+def _left_open_poses(detection) -> list[tuple[str, np.ndarray]]:
+    """The (model, pose) answers a detection reports the view could not rule out."""
+    return ([(detection.model, T) for T in detection.alternatives]
+            + [(r.model, r.T_cloud_model) for r in detection.rivals])
 
 
 def grade_instances(instances, detections, infos: dict[str, PartInfo]) -> tuple[list[bool], list[bool]]:

@@ -11,7 +11,7 @@ from part_meshes import box, plate_with_hole
 from paths import BENCHMARKS
 
 from psorr.synthetic.mesh_scenes import mesh_scene
-from psorr.types import Detection
+from psorr.types import Detection, Rival
 
 sys.path.insert(0, str(BENCHMARKS))
 import generalization_parts as parts  # noqa: E402
@@ -61,6 +61,15 @@ def test_a_false_detection_that_left_the_true_pose_open_is_counted_as_such(grade
     right = [Detection("block", block, 0.9, alternatives=(block,))]
     found, correct = parts.grade(scene, right, infos)
     assert parts.left_open(scene, right, found, correct, infos) == 0
+
+
+def test_a_false_detection_that_named_the_true_model_as_its_rival_is_counted_as_left_open(graded):
+    scene, infos = graded
+    block = scene.instances[1].T_camera_model
+    detections = [Detection("plate", block, 0.9, rivals=(Rival("block", block, 0.85),))]
+    found, correct = parts.grade(scene, detections, infos)
+    assert found == [False, False] and correct == [False]
+    assert parts.left_open(scene, detections, found, correct, infos) == 1
 
 
 def _results() -> dict:
