@@ -169,7 +169,8 @@ def scenes_lines(data: dict) -> str:
 
 def left_open_lines(data: dict, method: str = "psorr") -> str:
     """Per half: how many of ``method``'s false detections left the true pose open among their alternatives
-    (the near-symmetric poses a view could not rule out: ``Detection.alternatives``)."""
+    or rivals (the near-symmetric poses and other models' poses a view could not rule out:
+    ``Detection.alternatives``, ``Detection.rivals``)."""
     lines = []
     for name, split in data["splits"].items():
         result = split["methods"].get(method, {})
@@ -184,8 +185,8 @@ def report(data: dict) -> str:
     return "\n\n".join([
         scenes_lines(data), methods_table(data),
         "Targets (psorr):", targets_table(data),
-        *(["False detections that name the true pose among their alternatives (twin poses the view left open; "
-           "graded false all the same):", left_open] if left_open else []),
+        *(["False detections that name the true pose among what the view left open (twin poses, other models' "
+           "poses; graded false all the same):", left_open] if left_open else []),
         "Training, one model at a time from its mesh file, no cache (PSORR's and PSG's):", training_lines(data),
         "Recall by size:", sizes_table(data),
         "Recall by class:", classes_table(data), "Per part:", parts_table(data),
