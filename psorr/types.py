@@ -242,7 +242,7 @@ class Rival:
     """Another library ``model``'s pose ``T_cloud_model`` (4, 4: model metres into the cloud's frame) over a
     detection's pixels that the view could not rule out: rendered, the two agree with the measured depth
     alike (a cable clip and its variant for a thicker sleeve differ inside a channel the sensor does not
-    see into). ``score`` in [0, 1], as :attr:`Detection.score`; the detection kept is the better by it."""
+    see into). ``score`` in [0, 1], as :attr:`Detection.score`; the detection kept explained more."""
 
     model: str
     T_cloud_model: np.ndarray
