@@ -104,7 +104,7 @@ def _recognize(args) -> int:
         _log(f"wrote overlay to {args.png}")
     if args.json:
         print(json.dumps({
-            "detections": [{"model": d.model, "pose": _pose_record(d.T_cloud_model), "score": float(d.score),
+            "detections": [{"model": d.model, "pose": d.T_cloud_model.tolist(), "score": float(d.score),
                             **_colour_record(d), **_left_open_record(d)} for d in result.detections],
             "stats": {"method": stats.method, "hypotheses": int(stats.hypotheses),
                       "verify_ms_per_hypothesis": float(stats.verify_ms_per_hypothesis),
@@ -131,18 +131,14 @@ def _colour_record(detection) -> dict:
     return {"colour": detection.colour.name, "mean_rgb": [round(v, 4) for v in detection.colour.mean_rgb]}
 
 
-def _pose_record(T: np.ndarray) -> list[list[float]]:
-    return [[float(v) for v in row] for row in T]
-
-
 def _left_open_record(detection) -> dict:
     """The JSON fields of what the view left open: twin poses, and other models' poses (rivals); none if
     it settled both."""
     record = {}
     if detection.alternatives:
-        record["alternatives"] = [_pose_record(T) for T in detection.alternatives]
+        record["alternatives"] = [T.tolist() for T in detection.alternatives]
     if detection.rivals:
-        record["rivals"] = [{"model": r.model, "pose": _pose_record(r.T_cloud_model), "score": float(r.score)}
+        record["rivals"] = [{"model": r.model, "pose": r.T_cloud_model.tolist(), "score": float(r.score)}
                             for r in detection.rivals]
     return record
 

@@ -13,7 +13,7 @@ from functools import cached_property
 
 import numpy as np
 
-from psorr.checks.arrays import UNIT_TOLERANCE, frozen_array, integer_labels, not_unit, rigid_pose
+from psorr.checks.arrays import UNIT_TOLERANCE, frozen_array, integer_labels, not_unit, rigid_pose, unit_share
 from psorr.errors import InvalidInputError
 
 
@@ -250,10 +250,7 @@ class Rival:
 
     def __post_init__(self):
         object.__setattr__(self, "T_cloud_model", rigid_pose(self.T_cloud_model, "Rival.T_cloud_model"))
-        score = float(self.score)
-        if not 0.0 <= score <= 1.0:
-            raise InvalidInputError(f"Rival.score must lie in [0, 1], got {score}")
-        object.__setattr__(self, "score", score)
+        object.__setattr__(self, "score", unit_share(self.score, "Rival.score"))
 
 
 @dataclass(frozen=True, eq=False)
@@ -293,7 +290,4 @@ class Detection:
         object.__setattr__(self, "alternatives", tuple(rigid_pose(P, f"Detection.alternatives[{k}]")
                                                        for k, P in enumerate(self.alternatives)))
         for name in ("score", "visible_fraction"):
-            value = float(getattr(self, name))
-            if not 0.0 <= value <= 1.0:
-                raise InvalidInputError(f"Detection.{name} must lie in [0, 1], got {value}")
-            object.__setattr__(self, name, value)
+            object.__setattr__(self, name, unit_share(getattr(self, name), f"Detection.{name}"))

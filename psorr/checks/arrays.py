@@ -77,3 +77,11 @@ def rigid_pose(value, name: str) -> np.ndarray:
         raise InvalidInputError(f"{name} must be a rigid transform (orthonormal rotation, last row 0 0 0 1)")
     pose.setflags(write=False)
     return pose
+
+
+def unit_share(value, name: str) -> float:
+    """``value`` as a float in [0, 1] (a score, a share); an error naming ``name`` otherwise."""
+    value = float(value)
+    if not 0.0 <= value <= 1.0:
+        raise InvalidInputError(f"{name} must lie in [0, 1], got {value}")
+    return value
