@@ -30,6 +30,7 @@ from psorr.decomposition.detail import decompose_with_leftovers
 from psorr.decomposition.support_crop import band_rim, crop_to_parts, table_in_band
 from psorr.errors import InvalidInputError
 from psorr.hypotheses.candidates import CandidateSet
+from psorr.hypotheses.hidden_rests import HiddenRests
 from psorr.hypotheses.orr import orr_hypotheses
 from psorr.hypotheses.outline import OutlineMatcher
 from psorr.hypotheses.pairs import PairCandidates
@@ -87,6 +88,7 @@ class Recognizer:
         self.single_plane = SinglePlaneMatcher(library.models, p.single_plane)
         self.single_cylinder = SingleCylinderMatcher(library.models, p.single_cylinder)
         self.outline = OutlineMatcher(library.models, p.outline, p.acceptance.check) if p.outline.enabled else None
+        self.hidden_rests = None if self.outline is None else HiddenRests(self.outline)  # parts partly hidden
         self.psg = PsgMatcher(library, p.psg) if self.method is Method.PSG else None
         # ORR's own table of dense model pairs, built (or read from the training cache) once per recognizer.
         self.orr_table = OrrTable.for_library(library, p.orr.table) if self.method is Method.ORR else None
@@ -128,7 +130,7 @@ class Recognizer:
         if not cloud.valid_mask.any():  # a frame the sensor measured nothing in (the arm over its lens): none here
             return Recognition((), RecognitionStats(self.method, 0, 0.0, 0.0, 0.0, self.library.train_ms))
         found = search_per_segment(self._find, cloud, rng) if self.use_colour else self._find(cloud, rng, known)
-        return Recognition(found.detections, self._stats(found, start))
+        return Recognition(found.detections, RecognitionStats.of(self.method, found, start, self.library.train_ms))
 
     def _find(self, cloud: PointCloud, rng: np.random.Generator, known: CandidateSet = _NONE_KNOWN) -> SearchResult:
         view = SceneView(cloud)
@@ -160,13 +162,6 @@ class Recognizer:
         if not (p.sensor_noise and p.thin_finer):
             return cloud
         return thin_to_focal(cloud, p.sensor_focal).cloud
-
-    def _stats(self, found: SearchResult, start: float) -> RecognitionStats:
-        # No hypothesis, no verification to report: the cost of screening none is no cost per hypothesis.
-        per_hypothesis = found.verify_ms / found.hypotheses if found.hypotheses else 0.0
-        return RecognitionStats(self.method, found.hypotheses, per_hypothesis, found.decomposition_ms,
-                                (time.perf_counter() - start) * 1e3, self.library.train_ms, found.qpbo_nodes,
-                                found.qpbo_unlabelled)
 
     def _new_tally(self, view: SceneView) -> SearchTally:
         return SearchTally(PixelClaims(view.n_blocks, self.params.acceptance.max_shared_pixels,
@@ -216,6 +211,9 @@ class Recognizer:
             self._single_search(view, tally, apart_from(rests, tally.detections, self.library), fine_starts=True)
         if p.detail.fine_voxel is not None:
             self._second_look(cloud, cropped, view, tally, rng)
+        if self.hidden_rests is not None:  # parts an arm or a neighbour hides in part (decision 0071)
+            found = self.hidden_rests.candidates(cloud, view, lambda pts: self.detected.explain(tally.detections, pts))
+            self._single_search(view, tally, found, fine_starts=True)
         return tally.result()
 
     def _unexplained(self, cropped: PointCloud, view: SceneView, tally: SearchTally,

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field, replace
 
 from psorr.acceptance.params import AcceptParams
@@ -73,6 +74,14 @@ class RecognitionStats:
     train_ms: float
     qpbo_nodes: int = 0
     qpbo_unlabelled: int = 0
+
+    @classmethod
+    def of(cls, method: Method, found, start: float, train_ms: float) -> RecognitionStats:
+        """The stats of a search's result ``found`` (a SearchResult) begun at ``start`` (time.perf_counter())."""
+        # No hypothesis, no verification to report: the cost of screening none is no cost per hypothesis.
+        per_hypothesis = found.verify_ms / found.hypotheses if found.hypotheses else 0.0
+        return cls(method, found.hypotheses, per_hypothesis, found.decomposition_ms,
+                   (time.perf_counter() - start) * 1e3, train_ms, found.qpbo_nodes, found.qpbo_unlabelled)
 
 
 @dataclass(frozen=True)

@@ -18,16 +18,13 @@ from dataclasses import dataclass
 
 import numpy as np
 import trimesh
-from scipy import ndimage
 
 from psorr.checks import params as check
-from psorr.geometry.boxes import orthonormal_frame
 from psorr.geometry.distance_field import DistanceField
-from psorr.geometry.grid_morphology import closing, opening
 from psorr.hypotheses.candidates import Candidate, CandidateSet
-from psorr.sensing.kinect_noise import KINECT_V1
+from psorr.hypotheses.standing_patches import Patch, standing_grid, table_frame
 from psorr.types import PointCloud
-from psorr.verification.point_check import CheckParams, depth_tolerance
+from psorr.verification.point_check import CheckParams
 
 
 @dataclass(frozen=True)
@@ -48,7 +45,9 @@ class OutlineParams:
     of the silhouette to the patch, summed; poses costing more than ``max_cost`` are dropped (at 0.5, the points
     lie half a tolerance off on average both ways), and so are those costing more than ``max_cost_ratio`` times
     the patch's cheapest. The ``max_candidates`` best poses of a scene, taken from its patches in turn, go on to
-    acceptance.
+    acceptance. A patch within ``hidden_border`` cells of table that something higher than any rest hides from
+    the sensor is searched again, when the search leaves it unexplained, as a part partly hidden
+    (:mod:`psorr.hypotheses.hidden_rests`); None: never.
     """
 
     enabled: bool = True
@@ -66,6 +65,7 @@ class OutlineParams:
     max_cost: float = 0.5
     max_cost_ratio: float = 1.5
     max_candidates: int = 24
+    hidden_border: int | None = 4
 
     def __post_init__(self):
         check.flag(self, "enabled")
@@ -76,6 +76,8 @@ class OutlineParams:
         check.whole(self, "angles", "max_candidates")
         if self.rests is not None:
             check.whole(self, "rests", note=" (None: every stable rest)")
+        if self.hidden_border is not None:
+            check.whole(self, "hidden_border", note=" (None: no search of partly hidden parts)")
 
 
 # Percent: a patch's top and reach are those of all but its 2% most extreme points. The table's noise lifts
@@ -99,26 +101,6 @@ class RestingShape:
     reach: float
 
 
-@dataclass(frozen=True, eq=False)
-class Patch:
-    """Points standing on the table, connected: ``points`` (N, 3) in the table frame, ``outside`` the
-    distance field of its cells (2-D), ``tolerance`` the depth tolerance at its median depth."""
-
-    points: np.ndarray
-    outside: DistanceField
-    tolerance: float
-
-
-def table_frame(plane: np.ndarray) -> np.ndarray:
-    """T_cloud_table (4, 4) of a supporting plane (a, b, c, d; unit normal towards the sensor): z along the
-    normal, the origin the plane's point nearest the sensor."""
-    normal = np.asarray(plane[:3], dtype=float)
-    T = np.eye(4)
-    T[:3, 0], T[:3, 1] = orthonormal_frame(normal)
-    T[:3, 2], T[:3, 3] = normal, -plane[3] * normal
-    return T
-
-
 def _turns(angles: np.ndarray) -> np.ndarray:
     """(A, 3, 3) rotations by ``angles`` (radians) about z."""
     c, s = np.cos(angles), np.sin(angles)
@@ -132,15 +114,23 @@ def _square(centre: np.ndarray, span: np.ndarray) -> np.ndarray:
     return centre + np.stack(np.meshgrid(span, span, [0.0], indexing="ij"), -1).reshape(-1, 3)
 
 
-def _flat_cells(points: np.ndarray, T_table_cloud: np.ndarray, low: np.ndarray, cell: float,
-                shape: tuple) -> tuple[np.ndarray, np.ndarray]:
-    """The flat index (N,) into a grid of ``shape`` cells of ``cell`` from ``low`` (2,) on the table of each of
-    ``points`` (N, 3), and (N,) whether it falls on the grid (the index of one that does not is meaningless)."""
-    # Column by column: (N, 2) arrays and their reductions over axis 1 took twice as long on 300,000 points.
-    rows = np.floor((points @ T_table_cloud[0, :3] + T_table_cloud[0, 3] - low[0]) / cell).astype(np.int64)
-    cols = np.floor((points @ T_table_cloud[1, :3] + T_table_cloud[1, 3] - low[1]) / cell).astype(np.int64)
-    inside = (rows >= 0) & (rows < shape[0]) & (cols >= 0) & (cols < shape[1])
-    return rows * shape[1] + cols, inside
+def patch_reach(patch: Patch) -> float:
+    """How far ``patch`` reaches from its centre on the table: all but its most extreme points."""
+    centre = patch.points[:, :2].mean(axis=0)
+    return float(np.percentile(np.linalg.norm(patch.points[:, :2] - centre, axis=1), _EXTREME_SHARE))
+
+
+def _reaching(shifts: np.ndarray, points: np.ndarray, radius: float) -> np.ndarray:
+    """(S,) whether all but the most extreme of ``points`` (N, 3) lie within ``radius`` of each of ``shifts``
+    (S, 3) on the table."""
+    apart = np.linalg.norm(points[None, :, :2] - shifts[:, None, :2], axis=2)
+    return np.percentile(apart, _EXTREME_SHARE, axis=1) <= radius
+
+
+def cheapest(poses: list, ratio: float) -> list:
+    """``poses`` (cost, ...) costing at most ``ratio`` times the cheapest, cheapest first."""
+    poses = sorted(poses, key=lambda pose: pose[0])
+    return [pose for pose in poses if pose[0] <= ratio * poses[0][0]]
 
 
 def _subset(points: np.ndarray, count: int) -> np.ndarray:
@@ -171,6 +161,7 @@ class OutlineMatcher:
                 seen = seen - seen.mean(axis=0)
                 self.shapes.append(RestingShape(index, T, np.linalg.inv(T), _subset(seen, self._SILHOUETTE_SAMPLES),
                                                 rest.height, float(np.linalg.norm(seen, axis=1).max())))
+        self.tallest = max((shape.height for shape in self.shapes), default=0.0) + params.height_slack
 
     def candidates(self, cloud: PointCloud, view) -> CandidateSet:
         """Poses of the resting models over the patches standing on ``view``'s supporting plane in ``cloud``."""
@@ -178,8 +169,12 @@ class OutlineMatcher:
         plane = view.support_plane
         if plane is None or not self.shapes:
             return CandidateSet()
-        T_cloud_table = table_frame(plane)
-        per_patch = [self._patch_poses(patch) for patch in self._patches(cloud, plane, T_cloud_table)]
+        per_patch = [self._patch_poses(patch) for patch in self._patches(cloud, plane)]
+        return self.chosen(per_patch, table_frame(plane), start)
+
+    def chosen(self, per_patch: list, T_cloud_table: np.ndarray, start: float) -> CandidateSet:
+        """The ``max_candidates`` best of ``per_patch``'s poses (each patch's, cheapest first), in the cloud's
+        frame; ``start`` is when their search began (time.perf_counter())."""
         # The patches in turn, each's best first, so that one patch's many near-fits cannot crowd out another's.
         order = sorted(((rank, cost, model, T, k) for k, poses in enumerate(per_patch)
                         for rank, (cost, model, T) in enumerate(poses)), key=lambda pose: pose[:2])
@@ -187,70 +182,59 @@ class OutlineMatcher:
         return CandidateSet(tuple(Candidate(m, T_cloud_table @ T, region=k) for _, _, m, T, k in chosen),
                             sum(len(p) for p in per_patch), (time.perf_counter() - start) * 1e3, len(per_patch))
 
-    def _patches(self, cloud: PointCloud, plane: np.ndarray, T_cloud_table: np.ndarray):
-        """Each connected patch of points standing on the table (see OutlineParams)."""
-        p = self.params
-        points = cloud.points[cloud.valid_mask]
-        height = points @ plane[:3] + plane[3]
-        # The sensor's sigma only where the floor is cleared: a tenth of the points on a noisy table.
-        standing = height > p.min_height
-        standing[standing] = height[standing] > p.sigmas * KINECT_V1.depth_sigma(points[standing, 2])
-        # Higher than any resting model reaches, a point is something else's (an arm reaching in): it neither
-        # joins a patch nor counts among its cells' points, or a part under the arm would join the arm's patch.
-        # The tolerance is looked up only for the few points above the tallest rest, not the whole image.
-        tallest = max(shape.height for shape in self.shapes) + p.height_slack
-        beyond = height > tallest
-        beyond[beyond] = height[beyond] > tallest + depth_tolerance(points[beyond, 2], self.check)
-        standing &= ~beyond
-        if standing.sum() < 3:
-            return
-        T_table_cloud = np.linalg.inv(T_cloud_table)
-        up = points[standing] @ T_table_cloud[:3, :3].T + T_table_cloud[:3, 3]
-        low = up[:, :2].min(axis=0) - p.cell
-        shape = tuple(np.floor((up[:, :2].max(axis=0) + p.cell - low) / p.cell).astype(np.int64) + 1)
-        where, inside = _flat_cells(points, T_table_cloud, low, p.cell, shape)
-        inside &= ~beyond
-        every = np.bincount(where[inside], minlength=np.prod(shape))
-        raised = np.bincount(where[standing], minlength=np.prod(shape))
-        labels, count = ndimage.label(opening(closing(raised.reshape(shape) > 0, iterations=2)))
-        owner = labels.ravel()[where[standing]]
-        depth = points[standing, 2]
-        # Per label at once: the table's noise raises hundreds of specks, each a pass over the grid otherwise.
-        flat = labels.ravel()
-        area = np.bincount(flat, minlength=count + 1)
-        raised_in, every_in = (np.bincount(flat, weights=c, minlength=count + 1) for c in (raised, every))
-        for k in range(1, count + 1):
-            if area[k] * p.cell**2 < p.min_area or raised_in[k] < p.min_standing_share * every_in[k]:
-                continue
-            mine = labels == k
-            members = owner == k
-            outside = DistanceField.of_points(np.argwhere(mine) * p.cell + low + p.cell / 2, p.cell, self.truncation)
-            yield Patch(up[members], outside, float(depth_tolerance(np.median(depth[members]), self.check)))
+    def _patches(self, cloud: PointCloud, plane: np.ndarray):
+        """Each connected patch of points standing on the table (see OutlineParams), and the grid they lie on."""
+        grid = standing_grid(cloud, plane, self.params, self.tallest, self.check)
+        for label in () if grid is None else grid.patches:
+            yield grid.patch(label, grid.labels == label, self.truncation, self.check)
 
     def _patch_poses(self, patch: Patch) -> list:
-        """(cost, model, T_table_model) of the best poses over ``patch``, cheapest first: the best distinct
-        turns of each resting shape about as high as the patch and no narrower, coarsely; the
-        ``max_candidates`` cheapest of those refined."""
+        """(cost, model, T_table_model) of the best poses over ``patch``, cheapest first: those of the resting
+        shapes about as high as the patch and no narrower, shifted within ``shift``."""
+        p = self.params
+        reach = patch_reach(patch)
+        fitting = [shape for shape in self.shapes if reach <= shape.reach + patch.tolerance + p.shift]
+        return cheapest(self.poses(patch, fitting, lambda shape: p.shift, 2 * p.cell), p.max_cost_ratio)
+
+    def poses(self, patch: Patch, shapes: list, shift, step: float, within_reach: bool = False) -> list:
+        """(cost, model, T_table_model) of the poses over ``patch`` costing at most ``max_cost``: the best
+        distinct turns of each of ``shapes`` about as high as the patch, its centre moved within ``shift(shape)``
+        metres of the patch's in steps of ``step``, coarsely; the ``max_candidates`` cheapest of those refined.
+        ``within_reach``: only the shifts that leave the patch's points within the shape's reach of its centre
+        (its silhouette covers the patch), give or take the patch's tolerance and a step."""
         p = self.params
         top = np.percentile(patch.points[:, 2], _EXTREME_SHARE)
         centre = np.append(patch.points[:, :2].mean(axis=0), 0.0)
-        reach = np.percentile(np.linalg.norm(patch.points[:, :2] - centre[:2], axis=1), _EXTREME_SHARE)
-        step = 2 * p.cell
-        span = np.arange(-p.shift, p.shift + step / 2, step)
-        shifts = _square(centre, span)
         angles = np.radians(np.arange(0.0, 360.0, p.angle_step_deg))
         points = _subset(patch.points, self._COARSE_POINTS)
         peaks = []
-        for shape in self.shapes:
-            too_wide = reach > shape.reach + patch.tolerance + p.shift
-            if too_wide or abs(top - shape.height) > p.height_slack + patch.tolerance:
+        for shape in shapes:
+            if abs(top - shape.height) > p.height_slack + patch.tolerance:
+                continue
+            shifts = _square(centre, np.arange(-shift(shape), shift(shape) + step / 2, step))
+            if within_reach:
+                shifts = shifts[_reaching(shifts, points, shape.reach + patch.tolerance + step)]
+            if not len(shifts):
                 continue
             coarse = self._costs(patch, shape, angles, shifts, points)
-            peaks += [(cost, shape, angles[a], shifts[k]) for cost, a, k in self._distinct_turns(coarse, angles)]
+            for cost, a, k in self._distinct_turns(coarse, angles):
+                if step > 2 * p.cell:  # a coarser grid than the refinement reaches across: the ordinary one first
+                    cost, shift_k = self._closer(patch, shape, angles[a], shifts[k], step, points)
+                    peaks.append((cost, shape, angles[a], shift_k))
+                else:
+                    peaks.append((cost, shape, angles[a], shifts[k]))
         peaks.sort(key=lambda peak: peak[0])
         refined = [self._refined(patch, *peak[1:]) for peak in peaks[:p.max_candidates] if peak[0] <= p.max_cost]
-        poses = sorted((pose for pose in refined if pose[0] <= p.max_cost), key=lambda t: t[0])
-        return [pose for pose in poses if pose[0] <= p.max_cost_ratio * poses[0][0]]
+        return [pose for pose in refined if pose[0] <= p.max_cost]
+
+    def _closer(self, patch: Patch, shape: RestingShape, angle: float, shift: np.ndarray, step: float,
+                points: np.ndarray) -> tuple[float, np.ndarray]:
+        """(cost, shift) of the cheapest of the shifts within half of ``step`` of ``shift`` (3,), in the
+        ordinary search's steps of two cells, at turn ``angle``."""
+        span = np.arange(-step / 2, step / 2 + self.params.cell / 2, 2 * self.params.cell)
+        moves = _square(shift, span)
+        costs = self._costs(patch, shape, np.array([angle]), moves, points)[0]
+        return float(costs.min()), moves[int(np.argmin(costs))]
 
     def _distinct_turns(self, costs: np.ndarray, angles: np.ndarray) -> list:
         """(cost, turn index, shift index) of the ``angles`` cheapest cells of ``costs`` (turns x shifts) whose

@@ -90,7 +90,7 @@ def test_the_true_resting_pose_costs_least_and_a_wrong_model_more(library):
     matcher = OutlineMatcher(library.models, OutlineParams())
     view = SceneView(scene.cloud)
     T_cloud_table = table_frame(view.support_plane)
-    [patch] = list(matcher._patches(scene.cloud, view.support_plane, T_cloud_table))
+    [patch] = list(matcher._patches(scene.cloud, view.support_plane))
     poses = matcher._patch_poses(patch)
     bar = library.names.index("bar")
     assert poses[0][1] == bar
@@ -109,7 +109,7 @@ def test_specks_of_table_joined_to_a_patch_do_not_make_it_too_wide_for_its_part(
     matcher = OutlineMatcher(library.models, OutlineParams())
     view = SceneView(scene.cloud)
     T_cloud_table = table_frame(view.support_plane)
-    [patch] = list(matcher._patches(scene.cloud, view.support_plane, T_cloud_table))
+    [patch] = list(matcher._patches(scene.cloud, view.support_plane))
     centre = patch.points[:, :2].mean(axis=0)
     away = patch.points[:, :2] - centre
     far = np.argsort(-np.linalg.norm(away, axis=1))[: len(away) // 100]
