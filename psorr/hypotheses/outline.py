@@ -46,7 +46,7 @@ class OutlineParams:
     lie half a tolerance off on average both ways), and so are those costing more than ``max_cost_ratio`` times
     the patch's cheapest. The ``max_candidates`` best poses of a scene, taken from its patches in turn, go on to
     acceptance. A patch within ``hidden_border`` cells of table that something higher than any rest hides from
-    the sensor is searched again, when the search leaves it unexplained, as a part partly hidden
+    the sensor is searched again, when no part found explains it, as a part partly hidden
     (:mod:`psorr.hypotheses.hidden_rests`); None: never.
     """
 
@@ -183,7 +183,7 @@ class OutlineMatcher:
                             sum(len(p) for p in per_patch), (time.perf_counter() - start) * 1e3, len(per_patch))
 
     def _patches(self, cloud: PointCloud, plane: np.ndarray):
-        """Each connected patch of points standing on the table (see OutlineParams), and the grid they lie on."""
+        """Each connected patch of points standing on the table (see OutlineParams)."""
         grid = standing_grid(cloud, plane, self.params, self.tallest, self.check)
         for label in () if grid is None else grid.patches:
             yield grid.patch(label, grid.labels == label, self.truncation, self.check)
