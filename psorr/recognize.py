@@ -5,8 +5,9 @@ buffer with its supporting plane (verification); parts at rest tried first, whic
 stands (hypotheses.outline, acceptance.by_patch); what stands on the table decomposed into planes, cylinders and
 their shape graph (decomposition); pairs or cliques, clustered by vote and screened by intersecting primitive
 boxes (hypotheses, the paper's section 2.1.4); ICP, the point-level check and pixel claims (acceptance); then
-pairs again among the primitives left unexplained, single faces, long cylinders, the resting poses, and a
-finer second look at what still stands unexplained. ORR (Papazov and Burschka) pairs random oriented points.
+pairs again among the primitives left unexplained, single faces, long cylinders, the resting poses, a finer
+second look at what still stands unexplained, and the resting poses again over patches an occluder partly hides
+(hypotheses.hidden_rests). ORR (Papazov and Burschka) pairs random oriented points.
 """
 
 from __future__ import annotations
@@ -177,8 +178,8 @@ class Recognizer:
     def _decomposed_search(self, cloud: PointCloud, view: SceneView, rng: np.random.Generator,
                            tally: SearchTally) -> SearchResult:
         """PSORR and PSG: parts at rest tried first (:func:`~psorr.acceptance.by_patch.every_patch_found`); when
-        they do not explain all that stands, what stands on the table decomposed and searched (_search), parts
-        by their outline, and what no detection explains decomposed finer and searched again."""
+        they do not explain all that stands, what stands decomposed and searched (_search), parts by their outline,
+        what no detection explains decomposed finer and searched again, and parts an occluder partly hides."""
         p = self.params
         followed = bool(tally.detections)  # known parts followed: the search looks only at what they leave
         rests = None
