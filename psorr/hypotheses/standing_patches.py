@@ -54,7 +54,7 @@ def flat_cells(points: np.ndarray, T_table_cloud: np.ndarray, low: np.ndarray, c
 
 @dataclass(frozen=True, eq=False)
 class StandingGrid:
-    """The standing points' grid on the table: ``points`` (N, 3) in the table frame and their ``depth`` (N,,
+    """The standing points' grid on the table: ``points`` (N, 3) in the table frame and their ``depth`` (N,;
     metres from the sensor); ``labels`` (rows, cols) the patch of each cell (0: none), ``owner`` (N,) each
     point's; ``patches`` the labels that count as parts' patches; cell ``k``'s centre lies at
     ``low + (k + 0.5) cell``. ``T_cloud_table`` (4, 4) is the table's frame."""
