@@ -89,8 +89,6 @@ class HiddenRests:
         reads the costs falling towards it), cheapest first."""
         outline, p = self.outline, self.outline.params
         reach = patch_reach(patch)
-        fitting = [shape for shape in outline.shapes if reach <= shape.reach + patch.tolerance + p.shift]
         wide = [shape for shape in outline.shapes if shape.reach > reach + patch.tolerance + p.shift]
-        poses = outline.poses(patch, fitting, lambda shape: p.shift, 2 * p.cell)
-        poses += outline.poses(patch, wide, lambda shape: shape.reach, outline.truncation, within_reach=True)
-        return cheapest(poses, p.max_cost_ratio)
+        wider = outline.poses(patch, wide, lambda shape: shape.reach, outline.truncation, within_reach=True)
+        return cheapest(outline.patch_poses(patch) + wider, p.max_cost_ratio)

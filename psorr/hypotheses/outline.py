@@ -169,7 +169,7 @@ class OutlineMatcher:
         plane = view.support_plane
         if plane is None or not self.shapes:
             return CandidateSet()
-        per_patch = [self._patch_poses(patch) for patch in self._patches(cloud, plane)]
+        per_patch = [self.patch_poses(patch) for patch in self._patches(cloud, plane)]
         return self.chosen(per_patch, table_frame(plane), start)
 
     def chosen(self, per_patch: list, T_cloud_table: np.ndarray, start: float) -> CandidateSet:
@@ -188,7 +188,7 @@ class OutlineMatcher:
         for label in () if grid is None else grid.patches:
             yield grid.patch(label, grid.labels == label, self.truncation, self.check)
 
-    def _patch_poses(self, patch: Patch) -> list:
+    def patch_poses(self, patch: Patch) -> list:
         """(cost, model, T_table_model) of the best poses over ``patch``, cheapest first: those of the resting
         shapes about as high as the patch and no narrower, shifted within ``shift``."""
         p = self.params

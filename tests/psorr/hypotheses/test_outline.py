@@ -91,7 +91,7 @@ def test_the_true_resting_pose_costs_least_and_a_wrong_model_more(library):
     view = SceneView(scene.cloud)
     T_cloud_table = table_frame(view.support_plane)
     [patch] = list(matcher._patches(scene.cloud, view.support_plane))
-    poses = matcher._patch_poses(patch)
+    poses = matcher.patch_poses(patch)
     bar = library.names.index("bar")
     assert poses[0][1] == bar
     truth = np.linalg.inv(T_cloud_table) @ scene.instances[0].T_camera_model
@@ -120,7 +120,7 @@ def test_specks_of_table_joined_to_a_patch_do_not_make_it_too_wide_for_its_part(
     shape = next(s for s in matcher.shapes if s.model == bar)
     assert np.linalg.norm(specked.points[:, :2] - centre, axis=1).max() > shape.reach + patch.tolerance + 0.004
     truth = np.linalg.inv(T_cloud_table) @ scene.instances[0].T_camera_model
-    offsets = [_mean_offset(library.model("bar"), T, truth) for cost, m, T in matcher._patch_poses(specked) if m == bar]
+    offsets = [_mean_offset(library.model("bar"), T, truth) for cost, m, T in matcher.patch_poses(specked) if m == bar]
     assert offsets and min(offsets) < 0.1 * library.model("bar").diameter
 
 
