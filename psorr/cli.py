@@ -110,7 +110,7 @@ def _recognize(args) -> int:
                       "verify_ms_per_hypothesis": float(stats.verify_ms_per_hypothesis),
                       "total_ms": float(stats.total_ms), "train_ms": float(stats.train_ms),
                       **({"qpbo_nodes": stats.qpbo_nodes, "qpbo_unlabelled": stats.qpbo_unlabelled}
-                         if stats.method == "psg" else {})},
+                         if stats.method in ("psg", "auto") else {})},
         }))
     else:
         print(f"{'model':<16} {'score':>6} {'seen':>5}  position (m)" + (" " * 15 + "colour" if args.colour else ""))

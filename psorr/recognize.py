@@ -36,7 +36,7 @@ from psorr.hypotheses.orr import orr_hypotheses
 from psorr.hypotheses.outline import OutlineMatcher
 from psorr.hypotheses.pairs import PairCandidates
 from psorr.hypotheses.pose_clusters import apart_from
-from psorr.hypotheses.psg import PsgMatcher
+from psorr.hypotheses.psg import clique_matcher
 from psorr.hypotheses.single_cylinder import SingleCylinderMatcher
 from psorr.hypotheses.single_plane import SinglePlaneMatcher
 from psorr.library.models import ModelLibrary
@@ -55,7 +55,7 @@ _TABLE_EXTENT = 1.2  # in diameters of the largest model: a primitive larger tha
 
 
 class Recognizer:
-    """Find library models in clouds: ``Recognizer(library, method=Method.PSORR | Method.ORR).recognize(cloud)``.
+    """Find library models in clouds: ``Recognizer(library, method="psorr" | "psg" | "auto" | "orr").recognize(cloud)``.
 
     With ``use_colour=True`` the cloud is segmented by colour and distance first (psorr.segment), each
     segment recognised alone, and each detection carries its segment's colour (``Detection.colour``)."""
@@ -90,7 +90,7 @@ class Recognizer:
         self.single_cylinder = SingleCylinderMatcher(library.models, p.single_cylinder)
         self.outline = OutlineMatcher(library.models, p.outline, p.acceptance.check) if p.outline.enabled else None
         self.hidden_rests = None if self.outline is None else HiddenRests(self.outline)  # parts partly hidden
-        self.psg = PsgMatcher(library, p.psg) if self.method is Method.PSG else None
+        self.psg = clique_matcher(library, self.method, p.psg)  # PSG's; AUTO's of the large models only
         # ORR's own table of dense model pairs, built (or read from the training cache) once per recognizer.
         self.orr_table = OrrTable.for_library(library, p.orr.table) if self.method is Method.ORR else None
 
@@ -103,7 +103,7 @@ class Recognizer:
         decomposition and total ms). ``rng`` drives the random draws (default: ``default_rng(0)``), so one
         seed gives the same detections.
 
-        ``known``: detections an earlier look of the same sensor found (PSORR and PSG, without colour). Each is
+        ``known``: detections an earlier look of the same sensor found (PSORR, PSG and AUTO, without colour). Each is
         judged again from its pose, and the search looks only at what they no longer explain
         (:mod:`psorr.acceptance.known`): a cell that looks again after each pick recognises what moved.
 
@@ -120,7 +120,7 @@ class Recognizer:
             raise InvalidInputError(f"recognize() takes a psorr.PointCloud, got {type(cloud).__name__}")
         known = known_candidates(self.library, known)
         if known.candidates and (self.method is Method.ORR or self.use_colour):
-            raise InvalidInputError("recognize()'s known detections are followed by the PSORR and PSG methods "
+            raise InvalidInputError("recognize()'s known detections are followed by the PSORR, PSG and auto methods "
                                     f"without colour; this recognizer is {self.method.value}"
                                     f"{' with colour' if self.use_colour else ''}: pass known=() or use one of them")
         require_seen_from_origin(cloud, "recognize(): the cloud")
@@ -253,10 +253,10 @@ class Recognizer:
         members = [cloud.points[scene.labels == k] for k in used]
         # Primitives no detection explains yet; those an earlier search's detections explain are out.
         open_ = np.array([not self.detected.explain(tally.detections, m) for m in members], dtype=bool)
-        if self.method is Method.PSG:  # the shape graph's cliques first; what they leave is paired (decision 0069)
+        if self.psg is not None:  # the shape graph's cliques first; what they leave is paired (decision 0069)
             more = self._cliques(cloud, view, scene, tally, table)
             open_ &= np.array([not self.detected.explain(more, m) for m in members], dtype=bool)
-        if self.method is Method.PSORR or (self.params.psg.pairs_after and open_.sum() >= 2):
+        if self.method is not Method.PSG or (self.params.psg.pairs_after and open_.sum() >= 2):
             open_ = self._pair_rounds(view, pts, nrm, prims, members, open_, tally)
         # A part showing one face, or one long cylinder, gives no pair; matched by size, it still gives
         # poses. Only primitives no detection explains are tried (a cylinder: nor what the faces' detections

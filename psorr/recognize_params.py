@@ -30,7 +30,7 @@ class RecognizeParams:
     - ``pairs``: pose hypotheses from primitive pairs, screened by box verification (PSORR);
     - ``single_plane``, ``single_cylinder``: poses from one face or one long cylinder (PSORR and PSG);
     - ``outline``: poses of parts resting on the table, from the patches they raise (PSORR and PSG; on by default);
-    - ``psg``: PSG matching's cliques and QPBO (``method="psg"``);
+    - ``psg``: PSG matching's cliques and QPBO (``method="psg"``, and ``"auto"`` for the models of many primitives);
     - ``orr``: the ORR baseline's random point pairs;
     - ``acceptance``: ICP, the point check's bars, and settling detections by the pixels they explain.
     """

@@ -89,11 +89,13 @@ class PointCloud:
 
 class Method(StrEnum):
     """Where recognition's hypotheses come from: PSORR's pairs of scene primitives, PSG's matched cliques of
-    the primitive shape graph, or ORR's random pairs of points (Papazov and Burschka's baseline)."""
+    the primitive shape graph, ORR's random pairs of points (Papazov and Burschka's baseline), or AUTO:
+    PSG's cliques for the models of many primitives, where it is the faster, and PSORR's pairs for all."""
 
     PSORR = "psorr"
     PSG = "psg"
     ORR = "orr"
+    AUTO = "auto"
 
 
 class PrimitiveKind(StrEnum):

@@ -13,6 +13,7 @@ keeps or cannot decide go on to acceptance, best box score first.
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -26,7 +27,7 @@ from psorr.hypotheses.pairs import PairParams
 from psorr.hypotheses.pose_clusters import densest, share_out
 from psorr.hypotheses.primitive_match import RADIUS_TOLERANCE, PrimitiveSizes
 from psorr.hypotheses.qpbo import solve_qpbo
-from psorr.types import Primitive, PrimitiveKind, PrimitiveShapeGraph
+from psorr.types import Method, Primitive, PrimitiveKind, PrimitiveShapeGraph
 from psorr.verification.box_score import PrimitiveArrays, box_scores
 
 _PAIRS = PairParams()
@@ -42,10 +43,13 @@ class PsgParams:
     keeps, one of each group within ``same_place`` metres (PSORR's vote cell) and the angle tolerance,
     the ``top`` shared out across models, go on to acceptance. With ``pairs_after``, the primitives the
     cliques' detections leave unexplained are paired as PSORR pairs them: a part that shows no clique of
-    its model (a board showing its top and one side) is still found (docs/decisions/0069)."""
+    its model (a board showing its top and one side) is still found (docs/decisions/0069). ``method="auto"``
+    matches the cliques of the models of at least ``auto_primitives`` primitives (planes and cylinders), where
+    PSG is the faster method, and pairs every model's (docs/decisions/0072)."""
 
     angle_tolerance: float = 10.0
     pairs_after: bool = True
+    auto_primitives: int = 17
     # PSORR's own screening: the same box test, vote cell and number of poses for ICP.
     min_box_score: float = _PAIRS.min_box_score
     box_thickness: float = _PAIRS.box_thickness
@@ -56,7 +60,7 @@ class PsgParams:
     def __post_init__(self):
         check.positive(self, "angle_tolerance", "box_thickness", "same_place")
         check.within(self, "min_box_score")
-        check.whole(self, "top", "max_hypotheses")
+        check.whole(self, "top", "max_hypotheses", "auto_primitives")
         check.flag(self, "pairs_after")
 
 
@@ -82,11 +86,13 @@ class _Hypotheses:
 
 
 class PsgMatcher:
-    """The library's model cliques, indexed once, matched against a scene's shape graph."""
+    """The library's model cliques, indexed once, matched against a scene's shape graph: every model's, or
+    those of the library's models ``indexed`` (their indices in ``library.models``)."""
 
-    def __init__(self, library, params: PsgParams | None = None):
+    def __init__(self, library, params: PsgParams | None = None, indexed: Sequence[int] | None = None):
         self.params = params or PsgParams()
-        self.models = list(library.models)
+        self.indexed = np.arange(len(library.models)) if indexed is None else np.asarray(indexed, dtype=np.int64)
+        self.models = [library.models[k] for k in self.indexed]
         self.model_cliques = [graph_cliques(m.graph) for m in self.models]
         self.corners = CornerIndex(self.models, self.model_cliques)
         self.edges = EdgeIndex(self.models)
@@ -120,7 +126,8 @@ class PsgMatcher:
         order = kept[np.argsort(-scores[kept], kind="stable")]
         order = share_out(_distinct(order, found.poses, found.models, self.params), found.models, self.params.top)
         verify_ms = (time.perf_counter() - start) * 1e3
-        chosen = CandidateSet.chosen(found.models, found.poses, order, len(found.poses), verify_ms, scores)
+        models = self.indexed[found.models]  # the library's indices
+        chosen = CandidateSet.chosen(models, found.poses, order, len(found.poses), verify_ms, scores)
         vertices = tuple(tuple(sorted({n[0] for n in found.nodes[k]} - {found.table})) for k in order)
         return PsgCandidates(chosen, n_nodes, n_unlabelled, vertices, tuple(float(explained[k]) for k in order))
 
@@ -176,6 +183,17 @@ class PsgMatcher:
             if all(abs(t @ _direction(s)) >= cos_tol for t, s in zip(turned, scene_prims)):
                 out.append(T)
         return out
+
+
+def clique_matcher(library, method: Method, params: PsgParams) -> PsgMatcher | None:
+    """The cliques ``method`` matches: every model's for PSG; for AUTO, those of the models of at least
+    ``params.auto_primitives`` primitives (None when there are none, and then AUTO is PSORR); None for the others."""
+    if method is Method.PSG:
+        return PsgMatcher(library, params)
+    if method is not Method.AUTO:
+        return None
+    large = [k for k, m in enumerate(library.models) if len(m.graph.primitives) >= params.auto_primitives]
+    return PsgMatcher(library, params, large) if large else None
 
 
 def _table_turned_over(graph: PrimitiveShapeGraph, max_extent: float,

@@ -15,7 +15,7 @@ class PerceptionParams:
     """The look's recognizer and sensor noise.
 
     Attributes:
-        method: the recognizer, a :class:`psorr.recognize.Method` value (``"psorr"``, ``"orr"`` or ``"psg"``).
+        method: the recognizer, a :class:`psorr.types.Method` value (``"psorr"``, ``"psg"``, ``"auto"``, ``"orr"``).
         noise_scale: the Kinect v1's axial depth noise (:data:`psorr.sensing.kinect_noise.KINECT_V1`, a standard
             deviation growing with the square of the depth) times this; 1 is the real sensor, 0 exact depth
             along the ray. The lateral jitter, disparity steps and dropouts stay the Kinect's.

@@ -9,7 +9,7 @@
     resolution: [640x480, 320x240]   # the Kinect's image (default: 640x480); the field of view is kept
     occluder: true                   # the person reaches in (default true)
     noise: [1, 2]                    # the Kinect v1's axial depth noise times this (default 1)
-    method: [psorr, orr]             # the recognizer (default psorr; orr, psg)
+    method: [psorr, orr]             # the recognizer (default psorr; psg, auto, orr)
 
 The grid is every combination; each combination is one :class:`EpisodeSpec`, named by its values.
 """

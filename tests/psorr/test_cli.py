@@ -224,20 +224,21 @@ def test_recognize_with_colour_reports_each_detection_s_colour(tmp_path):
     assert all(len(d["mean_rgb"]) == 3 for d in detections)
 
 
-def test_recognize_with_method_psg_finds_a_single_chassis(tmp_path):
+@pytest.mark.parametrize("method", ["psg", "auto"])
+def test_recognize_with_method_psg_finds_a_single_chassis(tmp_path, method):
     from psorr.synthetic.catalog import load_catalog
     from psorr.synthetic.workpiece_scenes import workpiece_scene
 
     chassis = load_catalog()["chassis"]
     scene = workpiece_scene(np.random.default_rng(3), {"chassis": chassis.load_mesh()}, ["chassis"])
     write_cloud(tmp_path / "scene.pcd", scene.cloud)
-    out = _run("recognize", str(chassis.mesh_path), str(tmp_path / "scene.pcd"), "--method", "psg", "--json")
+    out = _run("recognize", str(chassis.mesh_path), str(tmp_path / "scene.pcd"), "--method", method, "--json")
     assert out.returncode == 0, out.stderr
     record = json.loads(out.stdout)
     assert [d["model"] for d in record["detections"]] == ["chassis"]
     found = np.array(record["detections"][0]["pose"])
     assert np.linalg.norm(found[:3, 3] - scene.instances[0].T_camera_model[:3, 3]) < 0.005
-    assert record["stats"]["method"] == "psg" and record["stats"]["qpbo_nodes"] > 0
+    assert record["stats"]["method"] == method and record["stats"]["qpbo_nodes"] > 0
 
 
 def test_the_json_record_of_a_detection_holds_what_the_view_left_open():

@@ -146,14 +146,14 @@ def test_a_recognizer_takes_only_recognize_params(block_library, bad):
     assert Recognizer(block_library, params=params).pairs.params.refine_top == 4
 
 
-@pytest.mark.parametrize("method", ["psorr", "psg", "orr", Method.PSORR, Method.PSG, Method.ORR])
+@pytest.mark.parametrize("method", ["psorr", "psg", "orr", "auto", Method.PSORR, Method.PSG, Method.ORR, Method.AUTO])
 def test_a_recognizer_takes_a_method_by_name_or_enum(block_library, method):
     assert Recognizer(block_library, method=method).method is Method(method)
 
 
 @pytest.mark.parametrize("bad", ["PSORR ", "ppf", None, 1])
 def test_an_unknown_method_names_the_valid_ones(block_library, bad):
-    with pytest.raises(InvalidInputError, match=r"unknown method .*choose one of \['psorr', 'psg', 'orr'\]"):
+    with pytest.raises(InvalidInputError, match=r"unknown method .*choose one of \['psorr', 'psg', 'orr', 'auto'\]"):
         Recognizer(block_library, method=bad)
 
 

@@ -10,14 +10,14 @@ from psorr.hypotheses.cliques import CliqueKind, cylinder_match, cylinder_poses,
 from psorr.hypotheses.corners import CornerIndex
 from psorr.hypotheses.edges import EdgeIndex, EdgeSet
 from psorr.hypotheses.outline import OutlineParams
-from psorr.hypotheses.psg import PsgParams
+from psorr.hypotheses.psg import PsgMatcher, PsgParams, clique_matcher
 from psorr.hypotheses.single_cylinder import SingleCylinderParams
 from psorr.hypotheses.single_plane import SinglePlaneParams
 from psorr.recognize import Recognizer
 from psorr.recognize_params import RecognizeParams
 from psorr.synthetic.catalog import load_catalog, symmetric_add
 from psorr.synthetic.workpiece_scenes import workpiece_scene
-from psorr.types import OrientedBox, PrimitiveKind, PrimitiveShapeGraph
+from psorr.types import Method, OrientedBox, PrimitiveKind, PrimitiveShapeGraph
 
 
 def _moved(graph: PrimitiveShapeGraph, T: np.ndarray) -> PrimitiveShapeGraph:
@@ -92,16 +92,19 @@ def test_clique_features_are_invariant_to_rigid_motion(library, part):
             assert any(_carries(P, model, scene) for P in poses)
 
 
-def test_method_psg_finds_a_single_chassis(library):
+@pytest.mark.parametrize("method", ["psg", "auto"])
+def test_method_psg_finds_a_single_chassis(library, method):
+    # The chassis has more primitives than AUTO's bar, so AUTO matches its cliques too.
+    assert len(library.model("chassis").graph.primitives) >= PsgParams().auto_primitives
     catalog = load_catalog()
     scene = workpiece_scene(np.random.default_rng(3), {"chassis": catalog["chassis"].load_mesh()}, ["chassis"])
-    recognition = Recognizer(library, "psg").recognize(scene.cloud, np.random.default_rng(0))
+    recognition = Recognizer(library, method).recognize(scene.cloud, np.random.default_rng(0))
     chassis = [d for d in recognition.detections if d.model == "chassis"]
     assert len(chassis) == 1 and len(recognition.detections) == 1
     model = library.model("chassis")
     truth = scene.instances[0].T_camera_model
     assert symmetric_add(model.points, chassis[0].T_cloud_model, truth, catalog["chassis"]) < 0.1 * model.diameter
-    assert recognition.stats.method == "psg" and recognition.stats.hypotheses > 0
+    assert recognition.stats.method == method and recognition.stats.hypotheses > 0
     # QPBO's nodes are counted, and it left at most all of them undecided.
     assert 0 < recognition.stats.qpbo_nodes and 0 <= recognition.stats.qpbo_unlabelled <= recognition.stats.qpbo_nodes
 
@@ -161,3 +164,36 @@ def test_what_no_clique_explains_is_paired(library):
 
     assert found(pairs_after=False) == []
     assert found(pairs_after=True) == [True]
+
+
+def test_auto_matches_the_cliques_of_the_models_of_many_primitives_only(library):
+    sizes = {m.name: len(m.graph.primitives) for m in library.models}
+    bar = sorted(sizes.values())[len(sizes) // 2]  # about half the models at or above it
+    auto = clique_matcher(library, Method.AUTO, PsgParams(auto_primitives=bar))
+    assert sorted(m.name for m in auto.models) == sorted(n for n, k in sizes.items() if k >= bar)
+    assert 0 < len(auto.models) < len(sizes)
+    # No model that large: AUTO matches no cliques and is PSORR; PSG matches every model's; PSORR none.
+    assert clique_matcher(library, Method.AUTO, PsgParams(auto_primitives=max(sizes.values()) + 1)) is None
+    assert len(clique_matcher(library, Method.PSG, PsgParams(auto_primitives=bar)).models) == len(sizes)
+    assert clique_matcher(library, Method.PSORR, PsgParams()) is None
+
+
+def test_a_matcher_of_some_models_names_them_by_their_library_index(library):
+    names = [m.name for m in library.models]
+    chassis = names.index("chassis")
+    scene = _moved(library.model("chassis").graph, _random_motion(np.random.default_rng(5)))
+    found = PsgMatcher(library, indexed=[chassis]).candidates(scene, max_extent=1.0).found.candidates
+    assert found and {c.model for c in found} == {chassis}
+
+
+def test_auto_without_a_model_of_many_primitives_is_psorr(library):
+    catalog = load_catalog()
+    parts = ["chassis", "bracket", "bushing"]
+    scene = workpiece_scene(np.random.default_rng(4), {p: catalog[p].load_mesh() for p in parts}, parts)
+    none_large = RecognizeParams(psg=PsgParams(auto_primitives=10_000))
+    psorr = Recognizer(library, "psorr", none_large).recognize(scene.cloud, np.random.default_rng(0))
+    auto = Recognizer(library, "auto", none_large).recognize(scene.cloud, np.random.default_rng(0))
+    assert len(psorr.detections) >= 2
+    assert [(d.model, d.T_cloud_model.tolist()) for d in auto.detections] == \
+        [(d.model, d.T_cloud_model.tolist()) for d in psorr.detections]
+    assert auto.stats.hypotheses == psorr.stats.hypotheses and auto.stats.qpbo_nodes == 0
