@@ -8,9 +8,10 @@ capsule occluding the view. A detection is correct when its symmetry-aware
 ADD is under 0.1 x the model diameter; anything else is a false positive, and so is a second
 detection of one instance.
 
-PSG matching (the paper's second recognizer) runs beside PSORR, as its target is set here.
+PSG matching (the paper's second recognizer) runs beside PSORR, as its target is set here, and so does
+AUTO (PSG's cliques for the models of many primitives, PSORR's pairs for all), which must find as much as both.
 
-    python benchmarks/peers.py [--singles-seeds 2] [--clutter 6] [--methods psorr,psg,orr,fpfh,opencv_ppf]
+    python benchmarks/peers.py [--singles-seeds 2] [--clutter 6] [--methods psorr,psg,auto,orr,fpfh,opencv_ppf]
 """
 
 from __future__ import annotations
@@ -42,16 +43,18 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--singles-seeds", type=int, default=2, help="seeded scenes per part, single-part set")
     parser.add_argument("--clutter", type=int, default=6, help="number of 4-part occluded clutter scenes")
-    parser.add_argument("--methods", default="psorr,psg,orr,fpfh,opencv_ppf")
+    parser.add_argument("--methods", default="psorr,psg,auto,orr,fpfh,opencv_ppf")
     parser.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "results")
     args = parser.parse_args(argv)
     catalog, meshes, library, samples, diameters = catalog_library()
     # One recognizer per method for the whole run, as the peers keep their trained models: what a
     # model needs once (PSORR's near-symmetry data, FPFH's model features) is paid on first use.
     psorr, psg, orr = Recognizer(library, "psorr"), Recognizer(library, "psg"), Recognizer(library, "orr")
+    auto = Recognizer(library, "auto")
     methods = {
         "psorr": lambda cloud, rng: psorr.recognize(cloud, rng).detections,
         "psg": lambda cloud, rng: psg.recognize(cloud, rng).detections,
+        "auto": lambda cloud, rng: auto.recognize(cloud, rng).detections,
         "orr": lambda cloud, rng: orr.recognize(cloud, rng).detections,
         "fpfh": lambda cloud, rng: recognize_fpfh(meshes, cloud, rng),
         "opencv_ppf": lambda cloud, rng: recognize_ppf_opencv(meshes, cloud, rng),

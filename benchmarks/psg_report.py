@@ -1,5 +1,6 @@
-"""The PSG benchmark's report (benchmarks/psg.py): recall and time of PSORR and PSG per model, and the
-crossover, the fewest primitives from which PSG is the faster method.
+"""The PSG benchmark's report (benchmarks/psg.py): recall and time of PSORR, PSG and AUTO per model, the
+crossover (the fewest primitives from which PSG is the faster method), and whether AUTO, which picks by the
+model's primitive count, finds as much as the better of the two.
 
 Time is compared only where a method's own search ran: a lone part that the resting-pose trial settles
 (docs/decisions/0066-resting-poses-first.md) runs the same code in both methods, and which of the two then
@@ -13,27 +14,49 @@ from pathlib import Path
 import numpy as np
 from report_files import write_report
 
-METHODS = ("psorr", "psg", "cliques")
+METHODS = ("psorr", "psg", "auto", "cliques")
+TIMED = ("psorr", "psg", "auto")
+HEADER = ["model", "planes", "cylinders", "PSORR found", "PSG found", "PSG false", "auto found", "auto matches",
+          "searched", "PSORR / PSG / auto mean ms, searched", "PSORR / PSG / auto median ms", "cliques alone found"]
 
 
-def report(rows: list[dict], out: Path) -> None:
+def _table_row(r: dict) -> list[str]:
+    """One model's row of the table (``report`` has set its searched scenes and their mean times)."""
+    own, n = r["searched_mean_ms"], r["seeds"]
+    return [r["model"], str(r["planes"]), str(r["cylinders"]), f"{r['psorr']['found']}/{n}",
+            f"{r['psg']['found']}/{n}", str(r["psg"]["false"]), f"{r['auto']['found']}/{n}",
+            "cliques, then pairs" if r["auto_cliques"] else "pairs",
+            f"{len(r['searched_scenes'])}/{n}",
+            " / ".join(f"{own[m]:.0f}" for m in TIMED) if own else "the same code",
+            " / ".join(f"{np.median(r[m]['ms']):.0f}" for m in TIMED), f"{r['cliques']['found']}/{n}"]
+
+
+def report(rows: list[dict], out: Path, auto_primitives: int) -> None:
+    """Write psg.md and psg.json from ``rows`` (one per model); ``auto_primitives``: the fewest primitives
+    whose models method AUTO matches by their cliques."""
     rows = sorted(rows, key=lambda r: (r["planes"] + r["cylinders"], r["model"]))
     for r in rows:  # once per row, for the verdicts and the docs' table alike
         scenes = r["searched_scenes"] = _searched(r)
-        r["searched_mean_ms"] = {m: _mean(r[m], scenes) for m in ("psorr", "psg")} if scenes else None
-    lines = ["PSG matching against PSORR, each model alone, a library of 10 models, 1 core", "",
-             "| model | planes | cylinders | PSORR found | PSORR ms (median / mean) | PSG found | PSG false "
-             "| PSG ms (median / mean) | searched | PSORR / PSG mean ms, searched | cliques alone found |",
-             "|---|---|---|---|---|---|---|---|---|---|---|"]
-    for r in rows:
-        a, b, searched, own_ms = r["psorr"], r["psg"], r["searched_scenes"], r["searched_mean_ms"]
-        own = f"{own_ms['psorr']:.0f} / {own_ms['psg']:.0f}" if own_ms else "the same code"
-        lines.append(f"| {r['model']} | {r['planes']} | {r['cylinders']} | {a['found']}/{r['seeds']} | "
-                     f"{np.median(a['ms']):.0f} / {np.mean(a['ms']):.0f} | {b['found']}/{r['seeds']} | {b['false']} | "
-                     f"{np.median(b['ms']):.0f} / {np.mean(b['ms']):.0f} | {len(searched)}/{r['seeds']} | {own} | "
-                     f"{r['cliques']['found']}/{r['seeds']} |")
+        r["searched_mean_ms"] = {m: _mean(r[m], scenes) for m in TIMED} if scenes else None
+        r["auto_cliques"] = r["planes"] + r["cylinders"] >= auto_primitives
+    lines = ["PSG matching against PSORR, and AUTO, each model alone, a library of 10 models, 1 core", "",
+             "| " + " | ".join(HEADER) + " |", "|" + "---|" * len(HEADER)]
+    cells = [_table_row(r) for r in rows]
+    lines += ["| " + " | ".join(c) + " |" for c in cells]
+    verdicts = [_recall(rows), *_speed(rows), _auto(rows, auto_primitives)]
+    lines += ["", *[f"- {v}" for v in verdicts]]
+    write_report(out, "psg", lines, {"rows": rows, "verdicts": verdicts, "auto_primitives": auto_primitives,
+                                     "table": {"header": HEADER, "cells": cells}})
+
+
+def _recall(rows: list[dict]) -> str:
     total = {m: sum(r[m]["found"] for r in rows) for m in METHODS}
     n = sum(r["seeds"] for r in rows)
+    return (f"recall: PSORR {total['psorr']}/{n}, PSG {total['psg']}/{n}, AUTO {total['auto']}/{n}, PSG's cliques "
+            f"alone {total['cliques']}/{n} ({sum(r['cliques']['false'] for r in rows)} false)")
+
+
+def _speed(rows: list[dict]) -> list[str]:
     # Time only counts where PSG finds the model as often as PSORR (finding nothing is quick), and where a
     # method's own search ran: a scene the shared resting-pose trial settles runs the same code in both.
     both = [r for r in rows if r["psg"]["found"] >= r["psorr"]["found"] and r["searched_scenes"]]
@@ -44,22 +67,30 @@ def report(rows: list[dict], out: Path) -> None:
     # The fewest primitives from which on PSG is faster on every such model.
     crossover = min((c for c in size.values() if all(m in faster for m in size if size[m] >= c)), default=None)
     settled = [r["model"] for r in rows if not r["searched_scenes"]]
-    verdicts = [f"recall: PSORR {total['psorr']}/{n}, PSG {total['psg']}/{n}, PSG's cliques alone "
-                f"{total['cliques']}/{n} ({sum(r['cliques']['false'] for r in rows)} false)",
-                f"the resting-pose trial settled every scene of {', '.join(settled)}, for both methods alike"
-                if settled else "each model has a scene that a method searched on its own",
-                f"PSG finds {len(both)} of the {len(rows) - len(settled)} others as often as PSORR "
-                f"({', '.join(r['model'] for r in both) or 'none'}); of those it is faster (mean time over the "
-                f"scenes searched) on {', '.join(faster) or 'none'}",
-                "no crossover: PSG is not the faster method on the largest model it finds as often" if crossover is None
-                else f"crossover: PSG is the faster from {crossover} primitives on, on the models it finds as often"]
-    lines += ["", *[f"- {v}" for v in verdicts]]
-    write_report(out, "psg", lines, {"rows": rows, "verdicts": verdicts})
+    return [f"the resting-pose trial settled every scene of {', '.join(settled)}, for every method alike"
+            if settled else "each model has a scene that a method searched on its own",
+            f"PSG finds {len(both)} of the {len(rows) - len(settled)} others as often as PSORR "
+            f"({', '.join(r['model'] for r in both) or 'none'}); of those it is faster (mean time over the "
+            f"scenes searched) on {', '.join(faster) or 'none'}",
+            "no crossover: PSG is not the faster method on the largest model it finds as often" if crossover is None
+            else f"crossover: PSG is the faster from {crossover} primitives on, on the models it finds as often"]
+
+
+def _auto(rows: list[dict], auto_primitives: int) -> str:
+    large = [r["model"] for r in rows if r["auto_cliques"]]
+    fewer = [r["model"] for r in rows if r["auto"]["found"] < max(r["psorr"]["found"], r["psg"]["found"])]
+    searched = [r for r in rows if r["searched_scenes"]]
+    mean = {m: np.mean([r["searched_mean_ms"][m] for r in searched]) if searched else float("nan") for m in TIMED}
+    return (f"AUTO matches the cliques of the models of at least {auto_primitives} primitives "
+            f"({', '.join(large) or 'none'}) and pairs the rest; it finds "
+            + (f"fewer than PSORR or PSG on {', '.join(fewer)}" if fewer else "each model as often as the better "
+               "of PSORR and PSG") + "; mean over the searched models' mean times: "
+            + ", ".join(f"{m.upper()} {mean[m]:.0f} ms" for m in TIMED))
 
 
 def _searched(row: dict) -> list[int]:
-    """The scenes of ``row`` that PSORR or PSG searched on its own (decomposed), by index."""
-    return [k for k, (a, b) in enumerate(zip(row["psorr"]["searched"], row["psg"]["searched"])) if a or b]
+    """The scenes of ``row`` that PSORR, PSG or AUTO searched on its own (decomposed), by index."""
+    return [k for k, flags in enumerate(zip(*(row[m]["searched"] for m in TIMED))) if any(flags)]
 
 
 def _mean(method: dict, scenes: list[int]) -> float:

@@ -156,7 +156,7 @@ def verify_compiled_detail() -> str:
 
 # ---- against peers (benchmarks/peers.py) -----------------------------------------------------------------------
 
-PEER_NAMES = {"psorr": "psorr", "psg": "psg (ours)", "orr": "orr (ours)",
+PEER_NAMES = {"psorr": "psorr", "psg": "psg (ours)", "auto": "auto (ours: psg for large models)", "orr": "orr (ours)",
               "fpfh": "Open3D FPFH + RANSAC + ICP", "opencv_ppf": "OpenCV PPF3DDetector + ICP"}
 
 
@@ -232,24 +232,11 @@ def segment_osd() -> str:
 # ---- PSG matching against PSORR (benchmarks/psg.py) -------------------------------------------------------------
 
 def psg() -> str:
+    """benchmarks/psg.py: its report's own table (benchmarks/psg_report.py) and verdicts."""
     data = load("psg")
-    rows = []
-    for r in data["rows"]:
-        a, b = r["psorr"], r["psg"]
-        own = r["searched_mean_ms"]
-        rows.append([r["model"], str(r["planes"]), str(r["cylinders"]), f"{a['found']}/{r['seeds']}",
-                     _median_mean(a["ms"]), f"{b['found']}/{r['seeds']}", str(b["false"]),
-                     _median_mean(b["ms"]), f"{len(r['searched_scenes'])}/{r['seeds']}",
-                     f"{own['psorr']:.0f} / {own['psg']:.0f}" if own else "the same code",
-                     f"{r['cliques']['found']}/{r['seeds']}"])
+    header = data["table"]["header"]
     verdicts = "\n".join(f"- {v}" for v in data["verdicts"])
-    return table(["model", "planes", "cylinders", "PSORR found", "PSORR ms (median / mean)", "PSG found", "PSG false",
-                  "PSG ms (median / mean)", "searched", "PSORR / PSG mean ms, searched", "cliques alone found"], rows,
-                 "lrrrrrrrrrr") + "\n\n" + verdicts
-
-
-def _median_mean(ms: list) -> str:
-    return f"{statistics.median(ms):.0f} / {statistics.mean(ms):.0f}"
+    return table(header, data["table"]["cells"], "l" + "r" * (len(header) - 1)) + "\n\n" + verdicts
 
 
 def rerun_overhead() -> str:
