@@ -60,8 +60,8 @@ def _speed(rows: list[dict]) -> list[str]:
     # Time only counts where PSG finds the model as often as PSORR (finding nothing is quick), and where a
     # method's own search ran: a scene the shared resting-pose trial settles runs the same code in both.
     both = [r for r in rows if r["psg"]["found"] >= r["psorr"]["found"] and r["searched_scenes"]]
-    # Faster by the mean over those scenes, what a run of many scenes pays: of 4 scenes, medians fell within a
-    # few milliseconds of each other on the largest models, and which was lower changed run to run.
+    # Faster by the mean over those scenes, what a run of many scenes pays: of a few scenes, medians fell within
+    # a few milliseconds of each other on the largest models, and which was lower changed run to run.
     faster = [r["model"] for r in both if r["searched_mean_ms"]["psg"] < r["searched_mean_ms"]["psorr"]]
     size = {r["model"]: r["planes"] + r["cylinders"] for r in both}
     # The fewest primitives from which on PSG is faster on every such model.
