@@ -70,5 +70,5 @@ def test_known_must_be_detections_of_the_librarys_models(library, scene, first_l
         recognizer.recognize(scene.cloud, known=[np.eye(4)])
     with pytest.raises(InvalidInputError, match="'sprocket'.*holds .*chassis"):
         recognizer.recognize(scene.cloud, known=[Detection("sprocket", np.eye(4), 0.5)])
-    with pytest.raises(InvalidInputError, match="PSORR and PSG methods.*orr"):
+    with pytest.raises(InvalidInputError, match="PSORR, PSG and auto methods.*orr"):
         Recognizer(library, method="orr").recognize(scene.cloud, known=first_look.detections)
