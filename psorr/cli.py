@@ -173,7 +173,9 @@ def build_parser() -> argparse.ArgumentParser:
                      help="a folder of meshes (.stl/.obj/.ply), mesh files, or a saved library (.npz); "
                           "each model is named by its file stem")
     rec.add_argument("scene", metavar="SCENE", help="cloud file in metres, sensor frame, table and all")
-    rec.add_argument("--method", choices=[m.value for m in Method], default=Method.PSORR.value)
+    rec.add_argument("--method", choices=[m.value for m in Method], default=Method.PSORR.value,
+                     help="psorr: pairs of primitives (default); psg: cliques of the shape graph first; auto: "
+                          "cliques for the models of many primitives only; orr: random point pairs (the baseline)")
     rec.add_argument("--units", choices=("m", "mm"), default=None,
                      help="units of the meshes (default m; meshes of implausible size are refused without it)")
     rec.add_argument("--json", action="store_true", help="print exactly one JSON line to stdout")
