@@ -82,7 +82,7 @@ def _auto(rows: list[dict], auto_primitives: int) -> str:
     searched = [r for r in rows if r["searched_scenes"]]
     mean = {m: np.mean([r["searched_mean_ms"][m] for r in searched]) if searched else float("nan") for m in TIMED}
     return (f"AUTO matches the cliques of the models of at least {auto_primitives} primitives "
-            f"({', '.join(large) or 'none'}) and pairs the rest; it finds "
+            f"({', '.join(large) or 'none'}) and pairs every model's; it finds "
             + (f"fewer than PSORR or PSG on {', '.join(fewer)}" if fewer else "each model as often as the better "
                "of PSORR and PSG") + "; mean over the searched models' mean times: "
             + ", ".join(f"{m.upper()} {mean[m]:.0f} ms" for m in TIMED))
