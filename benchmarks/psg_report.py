@@ -47,6 +47,44 @@ def report(rows: list[dict], out: Path, auto_primitives: int) -> None:
     lines += ["", *[f"- {v}" for v in verdicts]]
     write_report(out, "psg", lines, {"rows": rows, "verdicts": verdicts, "auto_primitives": auto_primitives,
                                      "table": {"header": HEADER, "cells": cells}})
+    plot(rows, auto_primitives, out / "psg.png")
+
+
+def plot(rows: list[dict], auto_primitives: int, path: Path) -> None:
+    """Each method's mean time over a model's searched scenes against the model's primitive count, with AUTO's
+    bar; models whose every scene the resting-pose trial settled have no point."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    searched = [r for r in rows if r["searched_scenes"]]
+    # Models of one primitive count side by side, and each model's three methods joined by a line.
+    x = {}
+    for r in searched:
+        c = r["planes"] + r["cylinders"]
+        same = [q["model"] for q in searched if q["planes"] + q["cylinders"] == c]
+        x[r["model"]] = c + 0.8 * (same.index(r["model"]) - (len(same) - 1) / 2)
+    fig, ax = plt.subplots(figsize=(6.4, 3.8))
+    for r in searched:
+        ms = [r["searched_mean_ms"][m] for m in TIMED]
+        ax.plot([x[r["model"]]] * 2, [min(ms), max(ms)], color="lightgray", lw=1, zorder=0)
+        ax.annotate(r["model"], (x[r["model"]], min(ms)), textcoords="offset points", xytext=(0, -12),
+                    ha="center", fontsize=7)
+    for method, marker in zip(TIMED, "osd"):
+        ax.plot([x[r["model"]] for r in searched], [r["searched_mean_ms"][method] for r in searched], marker,
+                label=method.upper(), ms=7, alpha=0.8)
+    low = min(min(r["searched_mean_ms"].values()) for r in searched) if searched else 0.0
+    ax.set_ylim(bottom=0.85 * low)  # room for the names under the points
+    ax.axvline(auto_primitives - 0.75, color="gray", ls="--", lw=0.8)
+    ax.text(auto_primitives - 0.6, ax.get_ylim()[1], "AUTO: cliques from here", va="top", fontsize=7, color="gray")
+    ax.set_xlabel("model primitives (planes + cylinders)")
+    ax.set_ylabel("mean ms over the searched scenes")
+    ax.set_title("PSORR, PSG and AUTO on lone models (1 core)", fontsize=10)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
 
 
 def _recall(rows: list[dict]) -> str:

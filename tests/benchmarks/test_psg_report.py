@@ -60,6 +60,7 @@ def test_auto_is_held_against_the_better_of_psorr_and_psg_on_each_model(tmp_path
     assert verdicts[-1] == ("AUTO matches the cliques of the models of at least 20 primitives (large) and pairs "
                             "every model's; it finds each model as often as the better of PSORR and PSG; mean over "
                             "the searched models' mean times: PSORR 250 ms, PSG 250 ms, AUTO 200 ms")
+    assert (tmp_path / "psg.png").stat().st_size > 0  # the time-against-primitives picture
     rows[1]["psg"]["found"] = 2
     rows[1]["auto"]["found"] = 1
     assert "it finds fewer than PSORR or PSG on large;" in _verdicts(rows, tmp_path)[-1]
