@@ -111,12 +111,15 @@ def run(seeds: int, repeats: int) -> list[dict]:
     recognizers = {"psorr": Recognizer(library, "psorr"), "psg": Recognizer(library, "psg"),
                    "auto": Recognizer(library, "auto"), "cliques": Recognizer(library, "psg", CLIQUES_ALONE)}
     known = {m.name: (m.points[::10], find_symmetries(meshes[m.name]), m.diameter) for m in library.models}
+    # The models whose cliques AUTO matches, as its recognizer chose them.
+    auto_cliques = {m.name for m in recognizers["auto"].psg.models} if recognizers["auto"].psg else set()
     rows = []
     with tqdm(total=len(meshes) * seeds, desc="scenes", file=sys.stderr) as bar:
         for name in meshes:
             graph = library.model(name).graph
             row = {"model": name, "planes": sum(p.kind is PrimitiveKind.PLANE for p in graph.primitives),
-                   "cylinders": sum(p.kind is PrimitiveKind.CYLINDER for p in graph.primitives)}
+                   "cylinders": sum(p.kind is PrimitiveKind.CYLINDER for p in graph.primitives),
+                   "auto_cliques": name in auto_cliques}
             for method in METHODS:
                 row[method] = {"found": 0, "false": 0, "ms": [], "searched": []}
             for seed in range(seeds):

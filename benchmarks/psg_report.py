@@ -32,13 +32,12 @@ def _table_row(r: dict) -> list[str]:
 
 
 def report(rows: list[dict], out: Path, auto_primitives: int) -> None:
-    """Write psg.md and psg.json from ``rows`` (one per model); ``auto_primitives``: the fewest primitives
-    whose models method AUTO matches by their cliques."""
-    rows = sorted(rows, key=lambda r: (r["planes"] + r["cylinders"], r["model"]))
+    """Write psg.md, psg.json and psg.png from ``rows`` (one per model; ``auto_cliques``: whether AUTO matched
+    its cliques); ``auto_primitives``: the fewest primitives whose models AUTO matches by their cliques."""
+    rows = sorted(rows, key=lambda r: (_primitives(r), r["model"]))
     for r in rows:  # once per row, for the verdicts and the docs' table alike
         scenes = r["searched_scenes"] = _searched(r)
         r["searched_mean_ms"] = {m: _mean(r[m], scenes) for m in TIMED} if scenes else None
-        r["auto_cliques"] = r["planes"] + r["cylinders"] >= auto_primitives
     lines = ["PSG matching against PSORR, and AUTO, each model alone, a library of 10 models, 1 core", "",
              "| " + " | ".join(HEADER) + " |", "|" + "---|" * len(HEADER)]
     cells = [_table_row(r) for r in rows]
@@ -47,10 +46,10 @@ def report(rows: list[dict], out: Path, auto_primitives: int) -> None:
     lines += ["", *[f"- {v}" for v in verdicts]]
     write_report(out, "psg", lines, {"rows": rows, "verdicts": verdicts, "auto_primitives": auto_primitives,
                                      "table": {"header": HEADER, "cells": cells}})
-    plot(rows, auto_primitives, out / "psg.png")
+    _plot(rows, auto_primitives, out / "psg.png")
 
 
-def plot(rows: list[dict], auto_primitives: int, path: Path) -> None:
+def _plot(rows: list[dict], auto_primitives: int, path: Path) -> None:
     """Each method's mean time over a model's searched scenes against the model's primitive count, with AUTO's
     bar; models whose every scene the resting-pose trial settled have no point."""
     import matplotlib
@@ -62,9 +61,8 @@ def plot(rows: list[dict], auto_primitives: int, path: Path) -> None:
     # Models of one primitive count side by side, and each model's three methods joined by a line.
     x = {}
     for r in searched:
-        c = r["planes"] + r["cylinders"]
-        same = [q["model"] for q in searched if q["planes"] + q["cylinders"] == c]
-        x[r["model"]] = c + 0.8 * (same.index(r["model"]) - (len(same) - 1) / 2)
+        same = [q["model"] for q in searched if _primitives(q) == _primitives(r)]
+        x[r["model"]] = _primitives(r) + 0.8 * (same.index(r["model"]) - (len(same) - 1) / 2)
     fig, ax = plt.subplots(figsize=(6.4, 3.8))
     for r in searched:
         ms = [r["searched_mean_ms"][m] for m in TIMED]
@@ -101,7 +99,7 @@ def _speed(rows: list[dict]) -> list[str]:
     # Faster by the mean over those scenes, what a run of many scenes pays: of a few scenes, medians fell within
     # a few milliseconds of each other on the largest models, and which was lower changed run to run.
     faster = [r["model"] for r in both if r["searched_mean_ms"]["psg"] < r["searched_mean_ms"]["psorr"]]
-    size = {r["model"]: r["planes"] + r["cylinders"] for r in both}
+    size = {r["model"]: _primitives(r) for r in both}
     # The fewest primitives from which on PSG is faster on every such model.
     crossover = min((c for c in size.values() if all(m in faster for m in size if size[m] >= c)), default=None)
     settled = [r["model"] for r in rows if not r["searched_scenes"]]
@@ -124,6 +122,11 @@ def _auto(rows: list[dict], auto_primitives: int) -> str:
             + (f"fewer than PSORR or PSG on {', '.join(fewer)}" if fewer else "each model as often as the better "
                "of PSORR and PSG") + "; mean over the searched models' mean times: "
             + ", ".join(f"{m.upper()} {mean[m]:.0f} ms" for m in TIMED))
+
+
+def _primitives(row: dict) -> int:
+    """The model's primitive count: its planes and cylinders."""
+    return row["planes"] + row["cylinders"]
 
 
 def _searched(row: dict) -> list[int]:

@@ -19,7 +19,7 @@ def _method(ms, searched, found=2):
 
 def _row(model, planes, psorr_ms, psg_ms, searched, psg_found=2, auto_found=2):
     auto_ms = psg_ms if planes >= 20 else psorr_ms
-    return {"model": model, "planes": planes, "cylinders": 0, "seeds": 2,
+    return {"model": model, "planes": planes, "cylinders": 0, "seeds": 2, "auto_cliques": planes >= 20,
             "psorr": _method(psorr_ms, searched), "psg": _method(psg_ms, searched, psg_found),
             "auto": _method(auto_ms, searched, auto_found), "cliques": _method((1, 1), searched)}
 
