@@ -37,6 +37,10 @@ class Rest:
 
 
 _RESTS: dict[str, tuple[Rest, ...]] = {}
+# Decimals to which rests' probabilities (and up directions) are compared when ordering them: a symmetric
+# part's copies of one rest differ by 1e-10 and less (rounding that differs between CPUs). Two distinct rests
+# closer than this are ordered by direction too, which changes only which draw gives which.
+PROBABILITY_DIGITS = 6
 
 
 def _mesh_key(mesh: trimesh.Trimesh) -> str:
@@ -86,8 +90,19 @@ def stable_rests(mesh: trimesh.Trimesh) -> tuple[Rest, ...]:
         if len(probabilities) == 0:
             raise InvalidInputError("trimesh found no stable resting pose for the mesh; is it a closed solid?")
         probabilities = np.asarray(probabilities) / np.sum(probabilities)
-        _RESTS[key] = tuple(_rest(T, p, mesh) for T, p in zip(transforms, probabilities))
+        order = _canonical_order(np.asarray(transforms), probabilities)
+        _RESTS[key] = tuple(_rest(transforms[k], probabilities[k], mesh) for k in order)
     return _RESTS[key]
+
+
+def _canonical_order(transforms: np.ndarray, probabilities: np.ndarray) -> np.ndarray:
+    """Indices of the rests, most probable first, rests whose probabilities agree to PROBABILITY_DIGITS
+    decimals ordered by the direction (model frame) that points up in them. trimesh orders by probability
+    alone, and the rests a symmetric part takes alike (a three-spoked knob on each spoke) differ there in
+    the last bits, which differ between CPUs: the same seed drew a different rest on another machine."""
+    up = np.round(transforms[:, 2, :3], PROBABILITY_DIGITS)
+    rounded = np.round(probabilities, PROBABILITY_DIGITS)
+    return np.lexsort((up[:, 2], up[:, 1], up[:, 0], -rounded))
 
 
 def draw_rest(rng: np.random.Generator, rests: tuple[Rest, ...]) -> Rest:
