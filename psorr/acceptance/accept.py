@@ -78,7 +78,7 @@ class Acceptance:
         observer().candidates(tuple(candidates), self.library)
         if fine_starts:
             candidates = self._not_seen_through(view, candidates)
-        fitted = [f for c in candidates if (f := self.fit(view, c, beyond)) is not None]
+        fitted = [f for c in candidates if (f := self.fit(view, c, beyond, fine_starts)) is not None]
         fitted.sort(key=lambda f: -f.check.score)
         return self._settle(view, fitted, claims)
 
@@ -104,10 +104,13 @@ class Acceptance:
         """A known pose judged as candidates are: coarse ICP, the fine fit, and its near-symmetric twins told apart."""
         return self._resolved(view, model, self._fine_fit(view, model, self._coarse_icp(view, model, T_cloud_model)))
 
-    def fit(self, view: SceneView, candidate: Candidate, beyond: SingleCylinderMatcher | None = None) -> Fitted | None:
-        """The candidate fitted (coarse ICP, then the fine fit) and point-checked, or None when it fails a bar."""
+    def fit(self, view: SceneView, candidate: Candidate, beyond: SingleCylinderMatcher | None = None,
+            fine_start: bool = False) -> Fitted | None:
+        """The candidate fitted (coarse ICP, then the fine fit) and point-checked, or None when it fails a bar.
+        ``fine_start``: the candidate is placed as finely as the point check's tolerance, and the coarse fit
+        keeps it where it is when the ICP only makes it worse."""
         model = self.library.models[candidate.model]
-        T, coarse = self._coarse_fit(view, model, candidate.T_cloud_model)
+        T, coarse = self._coarse_fit(view, model, candidate.T_cloud_model, fine_start)
         failed = self._hopeless(coarse)
         if failed is None:
             T = self._fine_fit(view, model, T)
@@ -125,11 +128,12 @@ class Acceptance:
         return refine_icp(view, model.points, model.normals, T, self.params.icp_distance,
                           iterations=_COARSE_ITERATIONS, max_points=_COARSE_POINTS, skip_holes=True)
 
-    def _coarse_fit(self, view, model, T) -> tuple[np.ndarray, PoseCheck]:
+    def _coarse_fit(self, view, model, T, keep_start: bool = False) -> tuple[np.ndarray, PoseCheck]:
         """The coarse ICP of a candidate, and its coarse point check. A part that slides almost onto
         itself (a channel) is also fitted from where the data place it along its length, and the better
         fit is kept: a slide judged from a tilted start went 2-5 cm the wrong way, from starts the plain
-        fit took to within 0.6 mm."""
+        fit took to within 0.6 mm. With ``keep_start``, a start the fit leaves hopeless but that is not as
+        placed comes back unfitted."""
         starts = [T]
         slid = self.resolvers[model.name].slide_onto_surface(view, T, _COARSE)
         if not np.array_equal(slid, T):
@@ -137,6 +141,12 @@ class Acceptance:
         fits = [self._coarse_icp(view, model, S) for S in starts]
         checks = [check_pose(view, model.points, model.normals, F, _COARSE) for F in fits]
         best = max(range(len(fits)), key=lambda k: checks[k].score)
+        # A start placed within the check's tolerance that the ICP makes hopeless is kept as placed: a part
+        # 38% in view beside an arm the sensor could not measure went from 1.1 to 3.5 mm off, 11% seen through.
+        if keep_start and self._hopeless(checks[best]) is not None:
+            start = check_pose(view, model.points, model.normals, T, _COARSE)
+            if self._hopeless(start) is None:
+                return T, start
         return fits[best], checks[best]
 
     def _hopeless(self, coarse: PoseCheck) -> str | None:

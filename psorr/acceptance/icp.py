@@ -117,7 +117,7 @@ def refine_icp(view: SceneView, model_points, model_normals, T_cloud_model, max_
         # under two others went from its true pose to 0.47 diameters off).
         z = pts[visible, 2]
         pixel = v * view.width + u
-        keep = ~(z > view.depth[pixel] + depth_tolerance(z, CheckParams()))
+        keep = ~(z > view.depth[pixel] + depth_tolerance(z, CheckParams())) & ~view.out_of_sight[pixel]
         if skip_holes:
             measured = view.measured_near[pixel]
             if (keep & ~measured).sum() > HOLE_SHARE * keep.sum():

@@ -4,11 +4,13 @@ The resting-pose search (:mod:`psorr.hypotheses.outline`) charges a silhouette f
 off the patch, and shifts a pose's centre only a few millimetres from the patch's. A part half under an arm
 shows a patch whose centre lies far from the part's, and the true pose's silhouette covers table cells the
 sensor never saw: the search misses it. Here a table cell counts as hidden when the sensor's ray to it meets
-something higher than any model rests; a patch that borders hidden cells may cover them at no cost, and each
-resting shape wider than the patch is shifted as far as its own reach, the farthest its silhouette's centre
-can lie from the centre of any piece of it. This runs after the full search, and only over patches no part
-found explains: the cheap silhouettes over hidden cells would otherwise crowd the other poses out.
-Measured: docs/decisions/0071-partly-hidden-resting-parts.md.
+something higher than any model rests, or lies out of the sensor's sight (an arm nearer than its range:
+:attr:`~psorr.verification.scene_view.SceneView.out_of_sight`); a patch that borders hidden cells may cover
+them at no cost, and each resting shape wider than the patch is shifted as far as its own reach, the farthest
+its silhouette's centre can lie from the centre of any piece of it. This runs after the full search, and only
+over patches no part found explains: the cheap silhouettes over hidden cells would otherwise crowd the other
+poses out.
+Measured: docs/decisions/0071-partly-hidden-resting-parts.md and 0073-out-of-sight.md.
 """
 
 from __future__ import annotations
@@ -28,7 +30,8 @@ from psorr.verification.point_check import depth_tolerance
 def hidden_cells(grid: StandingGrid, view, plane: np.ndarray, tallest: float, check) -> np.ndarray:
     """(rows, cols) the grid's table cells that no patch holds and that ``view`` sees through something
     higher than ``tallest`` metres above ``plane``: the depth at the cell's pixel is nearer than the table's
-    there, by more than the point check's tolerance, and that nearer point stands above every rest."""
+    there, by more than the point check's tolerance, and that nearer point stands above every rest; or the
+    pixel lies out of the sensor's sight (``view.out_of_sight``)."""
     rows, cols = grid.labels.shape
     centres = grid.centres(np.ones((rows, cols), dtype=bool))
     T = grid.T_cloud_table
@@ -39,7 +42,8 @@ def hidden_cells(grid: StandingGrid, view, plane: np.ndarray, tallest: float, ch
     depth = np.where(nearer, depth, 0.0)  # a pixel with no measurement (inf) stands for no point
     seen = np.column_stack([(u - view.cx) * depth / view.focal, (v - view.cy) * depth / view.focal, depth])
     height = np.where(nearer, seen @ plane[:3] + plane[3], -np.inf)
-    return (height > tallest).reshape(rows, cols) & (grid.labels == 0)
+    hidden = (height > tallest) | (inside & view.out_of_sight[v * view.width + u])
+    return hidden.reshape(rows, cols) & (grid.labels == 0)
 
 
 class HiddenRests:
@@ -60,7 +64,8 @@ class HiddenRests:
         points in the cloud's frame, says whether a part found already accounts for them: those are skipped."""
         start = time.perf_counter()
         outline, plane = self.outline, view.support_plane
-        if plane is None or not outline.shapes or self.border is None or not self._above_every_rest(cloud, plane):
+        if plane is None or not outline.shapes or self.border is None or not (
+                self._above_every_rest(cloud, plane) or view.out_of_sight.any()):
             return CandidateSet()
         grid = standing_grid(cloud, plane, outline.params, outline.tallest, outline.check, self.margin)
         if grid is None:

@@ -3,7 +3,8 @@
 Each model point that would face the sensor under a pose, and is not hidden by the
 model itself, is either supported (it lies on the measured surface), a violation (it
 lies in front of the measured surface, where the sensor saw through it), occluded
-(something nearer hides it) or unknown (no measurement there).
+(something nearer hides it, or it lies where the sensor could measure nothing:
+SceneView.out_of_sight) or unknown (no measurement there).
 
 Many poses, of one model or several, are checked in one pass (check_poses): their
 points are stacked and every step after the pose transform runs once over all of
@@ -163,6 +164,9 @@ def check_poses(view, model_points: Sequence[np.ndarray], model_normals: Sequenc
     # 7.5 cm from its camera): hidden, like what the surface covers. Counted as unknown, a bushing under
     # the arm kept 0.36 of its unhidden points, and was rejected at its true pose.
     occluded |= ~np.isfinite(observed) & (z > view.nearby_depth[pixel] + tol)
+    # Where the sensor measured nothing over a region wider than a shadow's edge or a dropout (an arm nearer
+    # than its range), something it cannot measure may hide the point: hidden too, not evidence against it.
+    occluded |= view.out_of_sight[pixel]
     heights = np.concatenate(heights) if plane is not None else None
     # A thin part lying flat (a circuit board's 1.6 mm) is supported by the table wherever it is posed on
     # it, and at 1.6 m, where the tolerance is 22 mm, so are its components: such support is no evidence.

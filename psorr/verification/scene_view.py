@@ -78,6 +78,7 @@ class SceneView:
         self.points = pts
         ux, uy = pts[:, 0] / pts[:, 2], pts[:, 1] / pts[:, 2]
         self.focal = buffer_focal(cloud, ux, uy)
+        self.organised = cloud.is_organised
         self.cx, self.cy = -self.focal * ux.min() + 2, -self.focal * uy.min() + 2
         self.width = int(self.focal * (ux.max() - ux.min())) + 5
         self.height = int(self.focal * (uy.max() - uy.min())) + 5
@@ -156,6 +157,21 @@ class SceneView:
     def nearby_depth(self) -> np.ndarray:
         """(width x height,) the nearest measured depth within SHADOW_REACH pixels of each pixel (inf if none)."""
         return self._nearest_within(max(1, round(SHADOW_REACH * self.focal / KINECT_FOCAL)))
+
+    @cached_property
+    def out_of_sight(self) -> np.ndarray:
+        """(width x height,) bool: the pixel lies in a region where the sensor measured nothing that holds a
+        pixel with nothing measured within SHADOW_REACH: wider than a projector's shadow or a dropout beside
+        an edge, it is something the sensor cannot measure (nearer than its range, or absorbing its light)
+        that may hide what lies behind it. None in an unorganised cloud: what it lacks may have been cropped
+        or thinned away, and was not out of the sensor's sight."""
+        from scipy.ndimage import binary_propagation
+
+        unmeasured = ~np.isfinite(self.depth).reshape(self.height, self.width)
+        deep = ~np.isfinite(self.nearby_depth).reshape(self.height, self.width)
+        if not self.organised or not deep.any():
+            return np.zeros(self.width * self.height, dtype=bool)
+        return binary_propagation(deep, mask=unmeasured).ravel()
 
     def _nearest_within(self, reach: int) -> np.ndarray:
         """(width x height,) the least depth in the square of ``reach`` pixels around each pixel; the buffer

@@ -25,10 +25,11 @@ def library(tmp_path_factory):
     return trained_library(PARTS, tmp_path_factory.mktemp("hidden_rests"))
 
 
-def _under_an_arm(scene, share: float) -> PointCloud:
+def _under_an_arm(scene, share: float, measured: bool = True) -> PointCloud:
     """The scene's cloud with an arm 15 cm above the table across the far ``share`` of its part (along the
     table's x) and 5 cm of table past it: every point there is moved along its ray onto the arm, as the
-    sensor would see it, so the part's points under the arm are gone."""
+    sensor would see it, so the part's points under the arm are gone. Not ``measured``: the arm is nearer
+    than the sensor's range, and gives no points at all."""
     points = scene.cloud.points.reshape(-1, 3).copy()
     plane = SceneView(scene.cloud).support_plane
     T_table_cloud = np.linalg.inv(table_frame(plane))
@@ -38,8 +39,8 @@ def _under_an_arm(scene, share: float) -> PointCloud:
     with np.errstate(invalid="ignore"):
         arm = ((local[:, 0] > high - share * (high - low)) & (local[:, 0] < high + 0.05)
                & (np.abs(local[:, 1] - part[:, 1].mean()) < 0.06))
-    points[arm] *= ((ARM_HEIGHT - plane[3]) / (points[arm] @ plane[:3]))[:, None]
-    return PointCloud(points.reshape(scene.cloud.points.shape))
+    points[arm] *= ((ARM_HEIGHT - plane[3]) / (points[arm] @ plane[:3]))[:, None] if measured else np.nan
+    return PointCloud(points, width=scene.cloud.width, height=scene.cloud.height)
 
 
 def _best_offset(library, found, scene, name: str) -> float | None:
@@ -103,3 +104,23 @@ def test_the_recognizer_finds_the_plate_half_under_the_arm_only_with_the_search(
         offsets = [mesh_symmetric_add(model.points[::10], d.T_cloud_model, scene.instances[0].T_camera_model,
                                       find_symmetries(PARTS["plate"])) for d in detections if d.model == "plate"]
         assert bool(offsets and min(offsets) < 0.1 * model.diameter) is found, border
+
+
+def test_a_plate_half_under_an_arm_the_sensor_cannot_measure_is_found(library):
+    """The arm nearer than the sensor's range leaves a hole with no points: its cells are hidden, the plate's
+    samples there count as hidden rather than unseen, and the plate is found at its true pose; in the same
+    points stripped of the image's grid (what is missing there may have been cropped away), it is not."""
+    from psorr.recognize import Recognizer
+    from psorr.verification.point_check import check_pose
+
+    scene = mesh_scene(np.random.default_rng(1), PARTS, "single", names=["plate"])
+    cloud = _under_an_arm(scene, 0.5, measured=False)
+    model, truth = library.model("plate"), scene.instances[0].T_camera_model
+    check = check_pose(SceneView(cloud), model.points, model.normals, truth)
+    assert check.n_occluded > 0.3 * check.n_visible and check.unblocked_fraction > 0.9
+    points = cloud.points.reshape(-1, 3)
+    for given, found in ((cloud, True), (PointCloud(points[np.isfinite(points).all(axis=1)]), False)):
+        detections = Recognizer(library).recognize(given, np.random.default_rng(0)).detections
+        offsets = [mesh_symmetric_add(model.points[::10], d.T_cloud_model, truth, find_symmetries(PARTS["plate"]))
+                   for d in detections if d.model == "plate"]
+        assert bool(offsets and min(offsets) < 0.1 * model.diameter) is found

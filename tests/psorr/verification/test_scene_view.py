@@ -116,6 +116,36 @@ def test_unmeasured_pixels_beside_a_nearer_surface_count_as_hidden():
     assert check.unblocked_fraction > 0.9 and check.visible_fraction < 0.35
 
 
+def _with_holes(cloud: PointCloud) -> PointCloud:
+    """``cloud`` (an organised image) with nothing measured in a 60 x 40 pixel block (an arm nearer than the
+    sensor's range) and in a 2 x 2 pixel speck (a dropout)."""
+    points = cloud.points.copy()
+    points[200:240, 300:360] = np.nan
+    points[100:102, 100:102] = np.nan
+    return PointCloud(points)
+
+
+def test_a_wide_region_without_measurements_is_out_of_sight_a_dropout_is_not():
+    cloud = _scene(["bracket"], 3).cloud
+    view = SceneView(_with_holes(cloud))
+
+    def pixels(rows, cols):  # where the points removed there fall in the buffer
+        u, v, _ = view.project(cloud.points[rows, cols].reshape(-1, 3))
+        return np.unique(v * view.width + u)
+
+    block, speck = pixels(slice(200, 240), slice(300, 360)), pixels(slice(100, 102), slice(100, 102))
+    assert view.out_of_sight[block].all() and not view.out_of_sight[speck].any()
+    assert view.out_of_sight.sum() == len(block)
+
+
+def test_an_unorganised_cloud_has_nothing_out_of_sight():
+    # What an unorganised cloud lacks may have been cropped or thinned away, not hidden from the sensor.
+    cloud = _with_holes(_scene(["bracket"], 3).cloud)
+    points = cloud.points.reshape(-1, 3)
+    view = SceneView(PointCloud(points[np.isfinite(points).all(axis=1)]))
+    assert not view.out_of_sight.any()
+
+
 def test_the_supporting_plane_does_not_depend_on_how_busy_the_machine_is():
     # Open3D's threaded segment_plane shares one sample generator among its threads unguarded: with
     # every core busy it gave 2 distinct planes in 30 calls on this scene, and a seeded episode then
