@@ -35,12 +35,16 @@ def test_the_part_that_explains_the_whole_surface_wins_over_one_that_fits_inside
     assert judge.prefer("short", T @ INSIDE, "long", T) == -1
 
 
-@pytest.mark.parametrize("seed", [0, 1])
+@pytest.mark.parametrize("seed", [1, 2])
 def test_a_part_larger_than_the_measured_one_loses_where_the_sensor_sees_through_it(seed):
     scene = mesh_scene(np.random.default_rng(seed), {"long": LONG, "short": SHORT}, "single", names=["short"])
     T = scene.instances[0].T_camera_model
-    judge = _judge(SceneView(scene.cloud))
-    assert judge.prefer("long", T @ np.linalg.inv(INSIDE), "short", T) == -1
+    view = SceneView(scene.cloud)
+    longer = T @ np.linalg.inv(INSIDE)
+    # The long block's other half lies beside the short one, not inside the table (where the short block
+    # stands on that end, as for seed 0, no view tells the two apart).
+    assert abs(view.support_plane[:3] @ longer[:3, 0]) < 0.5
+    assert _judge(view).prefer("long", longer, "short", T) == -1
 
 
 def test_two_renders_that_agree_get_no_verdict():
@@ -60,10 +64,10 @@ NOTCHED = trimesh.boolean.difference(
         (0.04, 0.0, 0.01)))], engine="manifold")
 
 
-@pytest.mark.parametrize(("seed", "verdict"), [(5, 0), (3, 1)])
+@pytest.mark.parametrize(("seed", "verdict"), [(5, 0), (9, 1)])
 def test_a_verdict_needs_the_feature_to_show_over_more_than_a_pixel_or_two(seed, verdict):
     """Seed 5 shows the notch in two pixels that differ by 3 sigmas: one noisy pixel could decide, so the
-    judge does not (docs/decisions/0061). Seed 3 shows it over five or six, enough to tell the block it is
+    judge does not (docs/decisions/0061). Seed 9 shows it over five, enough to tell the block it is
     from the notched one."""
     scene = mesh_scene(np.random.default_rng(seed), {"long": LONG}, "single", names=["long"])
     T = scene.instances[0].T_camera_model
