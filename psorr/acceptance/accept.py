@@ -108,7 +108,7 @@ class Acceptance:
             fine_start: bool = False) -> Fitted | None:
         """The candidate fitted (coarse ICP, then the fine fit) and point-checked, or None when it fails a bar.
         ``fine_start``: the candidate is placed as finely as the point check's tolerance, and the coarse fit
-        keeps it where it is when the ICP only makes it worse."""
+        keeps it as placed when the ICP leaves it hopeless and it was not (docs/decisions/0073)."""
         model = self.library.models[candidate.model]
         T, coarse = self._coarse_fit(view, model, candidate.T_cloud_model, fine_start)
         failed = self._hopeless(coarse)
