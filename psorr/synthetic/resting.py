@@ -99,7 +99,7 @@ def _canonical_order(transforms: np.ndarray, probabilities: np.ndarray) -> np.nd
     """Indices of the rests, most probable first, rests whose probabilities agree to PROBABILITY_DIGITS
     decimals ordered by the direction (model frame) that points up in them. trimesh orders by probability
     alone, and the rests a symmetric part takes alike (a three-spoked knob on each spoke) differ there in
-    the last bits, which differ between CPUs: the same seed drew a different rest on another machine."""
+    the last bits, which need not be the same on another CPU: which rest a seed drew hung on them."""
     up = np.round(transforms[:, 2, :3], PROBABILITY_DIGITS)
     rounded = np.round(probabilities, PROBABILITY_DIGITS)
     return np.lexsort((up[:, 2], up[:, 1], up[:, 0], -rounded))

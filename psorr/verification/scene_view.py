@@ -167,10 +167,13 @@ class SceneView:
         or thinned away, and was not out of the sensor's sight."""
         from scipy.ndimage import binary_propagation
 
-        unmeasured = ~np.isfinite(self.depth).reshape(self.height, self.width)
+        nothing = np.zeros(self.width * self.height, dtype=bool)
+        if not self.organised:
+            return nothing
         deep = ~np.isfinite(self.nearby_depth).reshape(self.height, self.width)
-        if not self.organised or not deep.any():
-            return np.zeros(self.width * self.height, dtype=bool)
+        if not deep.any():
+            return nothing
+        unmeasured = ~np.isfinite(self.depth).reshape(self.height, self.width)
         return binary_propagation(deep, mask=unmeasured).ravel()
 
     def _nearest_within(self, reach: int) -> np.ndarray:
