@@ -15,7 +15,12 @@ without OpenCV's contrib modules). Every method runs on one core, on a scene bef
 Each model of the half is also trained once more alone, from its mesh file with the cache off, and
 timed: a user's first run.
 
-    python benchmarks/generalization.py [--split dev|test|both] [--quick] [--note "what else ran"]
+    python benchmarks/generalization.py [--split dev|test|both|all] [--quick] [--note "what else ran"]
+    python benchmarks/generalization.py --cad MY_PARTS --units m     # your own parts, any mesh format
+
+Any other folder of meshes is split into halves the same way on every machine (generalization_parts.py:
+folder_split), or taken whole with --split all; its results are written as generalization-FOLDER.*, beside
+the published ones, not over them.
 
 With --methods naming some of the methods, a half whose scenes are those of the results already
 written keeps the other methods' rows from them, so that a change to one recognizer reruns only it.
@@ -31,8 +36,9 @@ import time
 from pathlib import Path
 
 import _single_core  # noqa: F401  (must precede numpy)
+import generalization_parts as gp
 import numpy as np
-from generalization_parts import SPLITS, checked_split, class_row, grade, left_open, nearest_add, part_info
+from generalization_parts import HALVES, SplitError, checked_split, class_row, grade, left_open, nearest_add, part_info
 from generalization_plot import drawn_scene, plot, sketch
 from generalization_report import report
 from tqdm import tqdm
@@ -44,13 +50,14 @@ from psorr.synthetic.mesh_scenes import SceneKind, load_meshes, mesh_scene, simp
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_CAD = ROOT.parent / "shared" / "cad" / "prusa_i3"
 METHODS = ("psorr", "orr", "o3d_global", "fpfh", "opencv_ppf")
-SPLIT_SEED = {"dev": 1, "test": 2}
+SPLIT_SEED = {"dev": 1, "test": 2, "all": 3}
 KIND_SEED = {SceneKind.SINGLE: 0, SceneKind.CLUTTER: 1, SceneKind.OCCLUDED: 2}
 
 
 def _arguments(argv):
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--split", choices=("dev", "test", "both"), default="both")
+    parser.add_argument("--split", choices=("dev", "test", "both", "all"), default="both",
+                        help="a half of the parts (see generalization_parts.py), both halves, or all parts as one")
     parser.add_argument("--quick", action="store_true", help="4 single scenes, 1 clutter, 1 occluded a half; "
                         "writes generalization.quick.* (never a published result)")
     parser.add_argument("--singles", type=int, default=2, help="single-part scenes per part")
@@ -68,7 +75,8 @@ def _arguments(argv):
     if unknown:
         parser.error(f"unknown methods {unknown}; choose from {', '.join(METHODS)}")
     if args.cad is not None and not args.cad.is_dir():
-        parser.error(f"{args.cad}: no such folder; give the Prusa i3 parts with --cad (see ../shared/cad/README.md)")
+        parser.error(f"{args.cad}: no such folder; give a folder of meshes with --cad (the Prusa i3 parts: see "
+                     f"../shared/cad/README.md)")
     return args
 
 
@@ -111,7 +119,9 @@ def _scene_plan(names: list[str], split: str, args) -> list[tuple[SceneKind, lis
 
 def _half(split: str, meshes: dict) -> tuple[list[str], dict, dict]:
     """(part names, name -> mesh of the library's parts, name -> mesh of the distractors) of a half."""
-    names = sorted(SPLITS[split])
+    names = sorted(gp.folder_split(meshes)[split])
+    if not names:
+        raise SplitError(f"the {split} half of these {len(meshes)} parts is empty: run with --split all")
     parts = {n: meshes[n] for n in names}
     return names, parts, {**{n: m for n, m in meshes.items() if n not in parts}, **simple_shapes()}
 
@@ -212,14 +222,15 @@ def main(argv=None) -> int:
     meshes, short = checked_split(load_meshes(args.cad, args.units), args.cad)
     print(f"{len(meshes)} parts of at least 25 mm in {args.cad}; left out as shorter: {', '.join(short)}",
           file=sys.stderr)
-    stem = "generalization.quick" if args.quick else "generalization"
+    base = "generalization" if gp.is_prusa(meshes) else f"generalization-{args.cad.resolve().name}"
+    stem = f"{base}.quick" if args.quick else base
     json_path = args.out / f"{stem}.json"
     data = json.loads(json_path.read_text()) if json_path.exists() else {"splits": {}}
     if args.report_only and not data["splits"]:
         sys.exit(f"{json_path} holds no results to report: run without --report-only first")
     for split in () if args.report_only else (("dev", "test") if args.split == "both" else (args.split,)):
         data["splits"][split] = _merged(data["splits"].get(split), run_split(split, meshes, paths, args))
-    data["splits"] = {k: data["splits"][k] for k in ("dev", "test") if k in data["splits"]}
+    data["splits"] = {k: data["splits"][k] for k in HALVES if k in data["splits"]}
     text = report(data)
     print(text)
     args.out.mkdir(parents=True, exist_ok=True)

@@ -3,6 +3,8 @@ meshes built here and on hand-made results; the benchmark itself needs ../shared
 
 from __future__ import annotations
 
+import json
+import subprocess
 import sys
 
 import numpy as np
@@ -107,3 +109,44 @@ def test_training_is_judged_by_the_slowest_model():
     assert "| dev | training ms / model (slowest) | 1250 | <= 1000 | **missed** |" in report.targets_table(data)
     assert report.training_lines(data) == "- dev: 2 models, a median of 835 ms each, the slowest block in 1250 ms"
     assert "training ms" not in report.targets_table(_results())  # a run before training was timed
+
+
+def test_a_users_folder_is_dealt_into_halves_the_same_way_whatever_its_order():
+    names = [f"part-{k}" for k in range(7)]
+    halves = parts.folder_split(names)
+    assert halves == parts.folder_split(list(reversed(names)))
+    assert sorted(halves["dev"] + halves["test"]) == names and not set(halves["dev"]) & set(halves["test"])
+    assert (len(halves["dev"]), len(halves["test"])) == (4, 3) and halves["all"] == tuple(names)
+
+
+def test_the_prusa_parts_keep_their_fixed_split_and_must_all_be_there():
+    prusa = list(parts.DEV + parts.TEST)
+    assert parts.folder_split(prusa)["dev"] == parts.DEV
+    assert parts.folder_split(prusa[:2])["dev"] != parts.DEV  # a user's folder sharing two names is the user's
+    meshes = {n: box((0.03, 0.02, 0.01)) for n in prusa[1:]}
+    with pytest.raises(parts.SplitError, match="missing"):
+        parts.checked_split(meshes, "prusa_i3")
+
+
+def test_a_half_without_a_thin_part_has_no_thin_target_to_meet_or_miss():
+    data = _results()
+    data["splits"]["dev"]["parts"][0]["class"] = "prismatic"
+    assert "| dev | thin | - | >= 0.8 | no instance |" in report.targets_table(data)
+
+
+def test_the_benchmark_runs_on_a_folder_of_a_users_meshes_in_any_format(tmp_path):
+    folder = tmp_path / "my_parts"
+    folder.mkdir()
+    for name, mesh, suffix in (("block", box((0.05, 0.03, 0.02)), "stl"), ("plate", plate_with_hole(), "obj"),
+                               ("tiny", box((0.01, 0.01, 0.01)), "ply")):
+        mesh.export(folder / f"{name}.{suffix}")
+    out = tmp_path / "results"
+    run = subprocess.run([sys.executable, str(BENCHMARKS / "generalization.py"), "--cad", str(folder), "--units", "m",
+                          "--split", "all", "--quick", "--methods", "psorr", "--out", str(out)],
+                         capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert "left out as shorter: tiny" in run.stderr
+    written = json.loads((out / "generalization-my_parts.quick.json").read_text())
+    assert list(written["splits"]) == ["all"] and [p["part"] for p in written["splits"]["all"]["parts"]] == [
+        "block", "plate"]
+    assert (out / "generalization-my_parts.quick.png").stat().st_size > 0
