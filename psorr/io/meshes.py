@@ -86,21 +86,22 @@ def _wound_outward(path: Path, mesh):
     """``mesh``, turned right side out if it is inside out (said); refused if its faces disagree on which way
     is out. Models take their normals from the winding: an inside-out export (common from CAD) was found
     nowhere, and one with a third of its faces flipped scored lower, without a word. Only a closed mesh has
-    an inside to tell outward from; an open one is taken as it is, and said."""
-    if not mesh.is_watertight:
-        import trimesh
+    an inside to tell outward from (bodies touching along an edge of four faces included:
+    :func:`psorr.geometry.solids.is_closed`); an open one is taken as it is, and said."""
+    from psorr.geometry.solids import is_closed, open_edges
 
-        open_edges = len(trimesh.grouping.group_rows(mesh.edges_sorted, require_count=1))
-        warnings.warn(f"{path}: the mesh is not closed ({open_edges} edges border one face only), so nothing tells "
+    if not is_closed(mesh):
+        holes = open_edges(mesh)
+        if holes == 0:
+            raise CloudFileError(path, "its faces disagree on which way is out (some are wound against their "
+                                       "neighbours), and a model takes its normals from the winding",
+                                 "re-orient the faces coherently (trimesh.repair.fix_normals, or MeshLab's 'Re-Orient "
+                                 "all faces coherently') and export it again")
+        warnings.warn(f"{path}: the mesh is not closed ({holes} edges border one face only), so nothing tells "
                       "which way is out: its normals are taken from the faces' winding as exported, and a surface "
                       "with no back is trained as it is; export the part as a closed solid (watertight STL) to "
                       "silence this", stacklevel=3)
         return mesh
-    if not mesh.is_winding_consistent:
-        raise CloudFileError(path, "its faces disagree on which way is out (some are wound against their "
-                                   "neighbours), and a model takes its normals from the winding",
-                             "re-orient the faces coherently (trimesh.repair.fix_normals, or MeshLab's 'Re-Orient "
-                             "all faces coherently') and export it again")
     if mesh.volume < 0:
         warnings.warn(f"{path}: the mesh is inside out (every face is wound inward); trained turned right side out; "
                       "re-export it with outward normals to silence this", stacklevel=3)

@@ -16,6 +16,7 @@ import trimesh
 from scipy.spatial import ConvexHull, QhullError
 
 from psorr.errors import InvalidInputError, PsorrError
+from psorr.geometry.solids import is_closed
 
 
 @dataclass(frozen=True, eq=False)
@@ -49,9 +50,9 @@ def _mesh_key(mesh: trimesh.Trimesh) -> str:
 
 
 def _centre_of_mass(mesh: trimesh.Trimesh) -> np.ndarray:
-    """The solid's centre of mass; for a mesh that is not closed (6 of the Prusa parts as exported), its
-    convex hull's, since the volume integral of an open surface means nothing."""
-    return np.asarray(mesh.center_mass if mesh.is_watertight else mesh.convex_hull.center_mass)
+    """The solid's centre of mass (a mesh whose bodies touch along an edge bounds one too); for a mesh with
+    holes, its convex hull's, since the volume integral of an open surface means nothing."""
+    return np.asarray(mesh.center_mass if is_closed(mesh) else mesh.convex_hull.center_mass)
 
 
 def _outline(points: np.ndarray) -> np.ndarray:

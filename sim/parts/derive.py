@@ -20,6 +20,7 @@ import numpy as np
 import trimesh
 
 from psorr.errors import PsorrError
+from psorr.geometry.solids import is_closed, open_edges
 from psorr.synthetic.catalog import WorkpieceInfo
 from sim.errors import PartMeshError
 from sim.parts import tell
@@ -87,9 +88,8 @@ def upright_mesh(part: MeshPart) -> trimesh.Trimesh:
         except PsorrError as exc:
             raise PartMeshError(part.path, str(exc).removeprefix(f"{part.path}: "),
                                 "re-export it as STL, OBJ or PLY") from None
-    if not mesh.is_watertight:
-        open_edges = int(len(trimesh.grouping.group_rows(mesh.edges_sorted, require_count=1)))
-        raise PartMeshError(part.path, f"is not closed ({open_edges} edges border a hole): the cell needs its "
+    if not is_closed(mesh):  # a solid; bodies touching along an edge of four faces are one
+        raise PartMeshError(part.path, f"is not closed ({open_edges(mesh)} edges border a hole): the cell needs its "
                             "volume for the mass and a solid for collisions",
                             "close it (e.g. trimesh.repair.fill_holes, or MeshLab's Close Holes) and export again")
     for warning in heard:

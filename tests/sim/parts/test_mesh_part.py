@@ -65,6 +65,18 @@ def test_an_open_mesh_is_refused_with_the_reason(tmp_path):
         upright_mesh(MeshPart(tmp_path / "open.stl", units="mm"))
 
 
+def test_bodies_touching_along_an_edge_are_a_solid_not_an_open_mesh(tmp_path):
+    cube = trimesh.creation.box((30.0, 30.0, 30.0))
+    block = trimesh.creation.box((30.0, 60.0, 30.0))
+    block.apply_translation((30.0, 45.0, 0.0))  # shares one vertical edge with the cube: four faces border it
+    pair = trimesh.util.concatenate([cube, block])
+    pair.merge_vertices()
+    pair.export(tmp_path / "pair.stl")
+    assert not pair.is_watertight
+    mesh = upright_mesh(MeshPart(tmp_path / "pair.stl", units="mm"))
+    assert mesh.volume == pytest.approx(3 * 27e-6)
+
+
 def test_a_part_given_in_the_wrong_unit_is_too_small_for_the_sensor(tmp_path):
     trimesh.creation.box((0.04, 0.03, 0.02)).export(tmp_path / "block.stl")  # metres, read as millimetres
     with pytest.raises(PartMeshError, match="too small for the sensor.*is that the file's unit"):

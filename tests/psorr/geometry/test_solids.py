@@ -1,0 +1,53 @@
+"""Whether a mesh bounds a solid (psorr.geometry.solids), and what reading and resting make of one whose
+bodies touch along an edge (closed, yet not what trimesh calls watertight)."""
+
+import warnings
+
+import numpy as np
+import pytest
+import trimesh
+
+from psorr.geometry.solids import is_closed, open_edges
+from psorr.io.meshes import read_mesh
+from psorr.synthetic.resting import stable_rests
+
+pytest.importorskip("networkx", reason="trimesh's stable poses need networkx (pip install networkx)")
+
+
+def _touching_along_an_edge() -> trimesh.Trimesh:
+    """A 10 mm cube and a 10 x 20 x 10 mm block sharing one vertical edge (four faces border it), metres."""
+    cube = trimesh.creation.box((0.01, 0.01, 0.01))
+    cube.apply_translation((0.005, 0.005, 0.005))
+    block = trimesh.creation.box((0.01, 0.02, 0.01))
+    block.apply_translation((0.015, 0.02, 0.005))
+    mesh = trimesh.util.concatenate([cube, block])
+    mesh.merge_vertices()
+    return mesh
+
+
+def test_bodies_touching_along_an_edge_bound_a_solid():
+    mesh = _touching_along_an_edge()
+    assert not mesh.is_watertight and is_closed(mesh) and open_edges(mesh) == 0
+    assert mesh.volume == pytest.approx(3e-6)
+
+
+def test_a_hole_or_a_face_wound_against_its_neighbours_bounds_none():
+    holed = trimesh.creation.box()
+    holed.update_faces(np.arange(len(holed.faces)) != 0)
+    assert not is_closed(holed) and open_edges(holed) == 3
+    flipped = trimesh.creation.box()
+    flipped.faces[0] = flipped.faces[0][::-1]
+    assert not is_closed(flipped) and open_edges(flipped) == 0
+
+
+def test_such_a_part_is_read_without_a_word_and_rests_on_its_own_centre_of_mass(tmp_path):
+    mesh = _touching_along_an_edge()
+    mesh.export(tmp_path / "pair.stl")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        read = read_mesh(tmp_path / "pair.stl")
+    # Its rests are those of its own centre of mass (over the larger block), not its convex hull's.
+    assert not np.allclose(read.center_mass, read.convex_hull.center_mass, atol=1e-4)
+    _, expected = trimesh.poses.compute_stable_poses(read, center_mass=read.center_mass)
+    found = [rest.probability for rest in stable_rests(read)]
+    assert sorted(found) == pytest.approx(sorted(expected), abs=1e-6)
