@@ -44,7 +44,7 @@ from generalization_report import report
 from tqdm import tqdm
 
 from psorr.errors import PsorrError
-from psorr.io.meshes import MESH_SUFFIXES
+from psorr.io.meshes import MESH_SUFFIXES, UNITS
 from psorr.synthetic.mesh_scenes import SceneKind, load_meshes, mesh_scene, simple_shapes
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -65,7 +65,7 @@ def _arguments(argv):
     parser.add_argument("--occluded", type=int, default=10, help="occluded clutter scenes a half")
     parser.add_argument("--methods", default=",".join(METHODS))
     parser.add_argument("--cad", type=Path, help=f"the parts' folder (default: {DEFAULT_CAD})")
-    parser.add_argument("--units", default="mm", help="the meshes' units (m or mm)")
+    parser.add_argument("--units", default="mm", choices=tuple(UNITS), help="the meshes' length unit")
     parser.add_argument("--note", default="", help="what else ran on the machine, for the record")
     parser.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "results")
     parser.add_argument("--report-only", action="store_true",

@@ -14,6 +14,7 @@ import numpy as np
 from psorr.checks.clouds import require_seen_from_origin
 from psorr.cli_labels import decompose_command, segment_command
 from psorr.errors import PsorrError
+from psorr.io.meshes import UNITS
 from psorr.types import Method
 
 # DecomposeParams.voxel_size, which a test holds this to: importing the pipeline for --help costs a second.
@@ -176,7 +177,7 @@ def build_parser() -> argparse.ArgumentParser:
     rec.add_argument("--method", choices=[m.value for m in Method], default=Method.PSORR.value,
                      help="psorr: pairs of primitives (default); psg: cliques of the shape graph first; auto: "
                           "cliques for the models of many primitives only; orr: random point pairs (the baseline)")
-    rec.add_argument("--units", choices=("m", "mm"), default=None,
+    rec.add_argument("--units", choices=tuple(UNITS), default=None,
                      help="units of the meshes (default m; meshes of implausible size are refused without it)")
     rec.add_argument("--json", action="store_true", help="print exactly one JSON line to stdout")
     rec.add_argument("--png", metavar="OVERLAY.png", help="draw the recognised models over the cloud")

@@ -20,6 +20,8 @@ if TYPE_CHECKING:
     import trimesh
 
 MESH_SUFFIXES = (".stl", ".obj", ".ply")
+UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254}
+"""Metres per unit of the length units a mesh file may be in (CAD: mostly mm, US CAD often in; some OBJ: cm)."""
 
 
 def read_mesh(path) -> trimesh.Trimesh:

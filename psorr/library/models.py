@@ -25,13 +25,12 @@ from scipy.spatial import ConvexHull, QhullError
 from psorr.checks import params as check
 from psorr.decomposition import DecomposeParams, decompose
 from psorr.errors import CloudFileError, InvalidInputError
-from psorr.io.meshes import MESH_SUFFIXES, read_mesh
+from psorr.io.meshes import MESH_SUFFIXES, UNITS, read_mesh
 from psorr.library.cache import entry_path, load_entry, store_entry
 from psorr.library.file_format import load_models, save_models
 from psorr.library.ppf import HashParams, PairTable
 from psorr.types import PointCloud, PrimitiveKind, PrimitiveShapeGraph
 
-UNITS = {"m": 1.0, "mm": 0.001}
 _FOLDER_HINT = (" (a folder's: sorted(Path(folder).glob('*.stl')); or library_from_arguments([folder]) of "
                 "psorr.library.sources, which takes folders as psorr recognize does)")
 

@@ -106,7 +106,8 @@ class MeshScene(WorkpieceScene):
 
 
 def load_meshes(folder, units: str) -> dict[str, trimesh.Trimesh]:
-    """Every .stl, .obj and .ply mesh in ``folder``, scaled to metres from ``units`` ('m' or 'mm'), by file stem."""
+    """Every .stl, .obj and .ply mesh in ``folder``, scaled to metres from ``units`` ('m', 'cm', 'mm' or 'in':
+    psorr.io.meshes.UNITS), by file stem."""
     from psorr.io.meshes import MESH_SUFFIXES
     from psorr.library.models import load_mesh_in_metres
 

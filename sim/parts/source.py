@@ -9,9 +9,9 @@ from pathlib import Path
 
 import numpy as np
 
+from psorr.io.meshes import UNITS
 from sim.errors import SimInputError
 
-UNITS = {"m": 1.0, "mm": 1e-3}
 PLACES = ("fixture", "tote")
 DEFAULT_DENSITY = 1240.0
 """kg/m^3 of a part that gives none: printed PLA, the material of most parts users bring from a printer."""
@@ -24,7 +24,7 @@ class MeshPart:
 
     Attributes:
         path: the mesh file (STL, OBJ or PLY), absolute.
-        units: the file's length unit, ``"m"`` or ``"mm"``.
+        units: the file's length unit: ``"m"``, ``"cm"``, ``"mm"`` or ``"in"``.
         name: the part's name in the cell and in the recognizer's library (default: the file's stem).
         count: how many of it go on the table.
         color: its colour: (3,) RGB in [0, 1] or a name of ``psorr.segment.PALETTE`` (``"red"``), for every

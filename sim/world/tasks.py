@@ -5,7 +5,7 @@ A workpiece is a catalog part's name, or a mapping that names a mesh of the user
     workpieces:
       - chassis                     # a catalog part
       - mesh: parts/idler.stl       # relative paths are from the task file
-        units: mm                   # m (default) or mm
+        units: mm                   # m (default), cm, mm or in
         name: idler                 # default: the file stem
         count: 2                    # instances (default 1): bodies idler_1 and idler_2
         color: [0.8, 0.2, 0.2]      # optional RGB in [0, 1]

@@ -116,6 +116,12 @@ def test_implausible_size_needs_units(tmp_path):
     assert np.allclose(load_mesh_in_metres(path, "mm").extents, (0.1, 0.06, 0.04))
 
 
+def test_a_mesh_in_inches_or_centimetres_is_scaled_to_metres(tmp_path):
+    trimesh.creation.box(extents=(4.0, 2.5, 1.0)).export(tmp_path / "bracket.stl")
+    assert np.allclose(load_mesh_in_metres(tmp_path / "bracket.stl", "in").extents, (0.1016, 0.0635, 0.0254))
+    assert np.allclose(load_mesh_in_metres(tmp_path / "bracket.stl", "cm").extents, (0.04, 0.025, 0.01))
+
+
 def test_a_tiny_mesh_is_not_told_to_shrink_further(tmp_path):
     path = tmp_path / "speck.stl"
     trimesh.creation.box(extents=(0.0007, 0.0005, 0.0004)).export(path)

@@ -45,7 +45,7 @@ def test_a_name_replaces_the_file_stem(folder):
     ("workpieces: [chassis]\nspeed: 3\n", 2, "unknown key 'speed'"),
     ("workpieces:\n  - chassis\n  - gearbox\n", 3, "unknown workpiece 'gearbox'"),
     ("workpieces:\n  - mesh: parts/block.stl\n    colour: [1, 0, 0]\n", 3, "unknown key 'colour'"),
-    ("workpieces:\n  - mesh: parts/block.stl\n    units: inch\n", 3, "units must be one of m, mm"),
+    ("workpieces:\n  - mesh: parts/block.stl\n    units: inch\n", 3, "units must be one of m, cm, mm, in"),
     ("workpieces:\n  - mesh: parts/block.stl\n    color: [1, 0]\n", 3, "color must be 3 numbers"),
     ("workpieces:\n  - mesh: parts/block.stl\n    color: crimson\n", 3, "'crimson' is not a palette name"),
     ("workpieces:\n  - mesh: parts/block.stl\n    count: 2\n    color: [red]\n", 4, "1 colours for count 2"),
