@@ -15,7 +15,9 @@ import trimesh
 def edge_balance(mesh: trimesh.Trimesh) -> tuple[np.ndarray, np.ndarray]:
     """(faces bordering each undirected edge, (E,); the faces crossing it one way less the other way, (E,))."""
     directed = np.asarray(mesh.edges, dtype=np.int64)
-    _, index, count = np.unique(np.sort(directed, axis=1), axis=0, return_inverse=True, return_counts=True)
+    low, high = directed.min(axis=1), directed.max(axis=1)
+    # One integer per undirected edge: a 1-D unique is ten times faster than unique rows on large meshes.
+    _, index, count = np.unique(low * len(mesh.vertices) + high, return_inverse=True, return_counts=True)
     way = np.where(directed[:, 0] < directed[:, 1], 1.0, -1.0)
     return count, np.bincount(index.ravel(), weights=way, minlength=len(count))
 
@@ -25,6 +27,8 @@ def is_closed(mesh: trimesh.Trimesh) -> bool:
     winding (a watertight, consistently wound mesh; or one whose bodies touch along edges of four faces)."""
     if len(mesh.faces) == 0:
         return False
+    if mesh.is_watertight:  # trimesh's own checks, cached on the mesh, settle the common case
+        return bool(mesh.is_winding_consistent)
     return bool(np.all(edge_balance(mesh)[1] == 0))
 
 

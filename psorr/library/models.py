@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 import trimesh
 from scipy.spatial import ConvexHull, QhullError
+from scipy.spatial.distance import pdist
 
 from psorr.checks import params as check
 from psorr.decomposition import DecomposeParams, decompose
@@ -123,7 +124,7 @@ def _diameter(points: np.ndarray) -> float:
         corners = points[ConvexHull(points).vertices]
     except QhullError:  # a flat part (one sheet): joggled, the hull still names its extreme points
         corners = points[ConvexHull(points, qhull_options="QJ").vertices]
-    return float(np.max(np.linalg.norm(corners[:, None] - corners[None], axis=2)))
+    return float(np.max(pdist(corners)))  # a smooth part's hull has thousands of corners: no (K, K, 3) array
 
 
 def spread_samples(points: np.ndarray, count: int, rng) -> np.ndarray:
