@@ -20,12 +20,11 @@ from pathlib import Path
 
 import numpy as np
 import trimesh
-from scipy.spatial import ConvexHull, QhullError
-from scipy.spatial.distance import pdist
 
 from psorr.checks import params as check
 from psorr.decomposition import DecomposeParams, decompose
 from psorr.errors import CloudFileError, InvalidInputError
+from psorr.geometry.diameter import diameter as point_diameter
 from psorr.io.meshes import MESH_SUFFIXES, UNITS, read_mesh
 from psorr.library.cache import entry_path, load_entry, store_entry
 from psorr.library.file_format import load_models, save_models
@@ -113,18 +112,9 @@ def train_model(name: str, mesh: trimesh.Trimesh, params: TrainParams, sha: str 
     points, faces = trimesh.sample.sample_surface(mesh, count, seed=int(rng.integers(2**31)))
     normals = mesh.face_normals[faces]
     result = decompose(PointCloud(points, normals=normals), params.decompose, rng)
-    diameter = _diameter(points[::max(1, len(points) // 4000)])
+    diameter = point_diameter(points[::max(1, len(points) // 4000)])
     return Model(name, np.asarray(points), np.asarray(normals), result.graph, diameter, sha,
                  np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces, dtype=np.int64))
-
-
-def _diameter(points: np.ndarray) -> float:
-    """The largest distance between two of ``points`` (N, 3), found among their convex hull's corners."""
-    try:
-        corners = points[ConvexHull(points).vertices]
-    except QhullError:  # a flat part (one sheet): joggled, the hull still names its extreme points
-        corners = points[ConvexHull(points, qhull_options="QJ").vertices]
-    return float(np.max(pdist(corners)))  # a smooth part's hull has thousands of corners: no (K, K, 3) array
 
 
 def spread_samples(points: np.ndarray, count: int, rng) -> np.ndarray:

@@ -209,15 +209,9 @@ def symmetric_add(points_model, T_est, T_true, info: WorkpieceInfo) -> float:
 
 def model_diameter(mesh) -> float:
     """Metres: the largest distance between two vertices of `mesh` (a trimesh.Trimesh or an (N, 3) array)."""
-    from scipy.spatial import ConvexHull, QhullError
-    from scipy.spatial.distance import pdist
+    from psorr.geometry.diameter import diameter
 
     vertices = np.asarray(getattr(mesh, "vertices", mesh), dtype=np.float64)
     if vertices.ndim != 2 or vertices.shape[1] != 3 or len(vertices) < 2:
         raise InvalidInputError(f"model_diameter needs at least two 3-D vertices, got shape {vertices.shape}")
-    try:
-        # The farthest pair is always on the convex hull, which is far smaller than the mesh.
-        vertices = vertices[ConvexHull(vertices).vertices]
-    except QhullError:
-        pass  # flat or degenerate: fall back to all vertices
-    return float(pdist(vertices).max())
+    return diameter(vertices)

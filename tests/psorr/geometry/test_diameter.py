@@ -1,0 +1,39 @@
+"""The diameter of a point set (psorr.geometry.diameter) against every pair measured."""
+
+import numpy as np
+import pytest
+from scipy.spatial.distance import pdist
+
+from psorr.errors import InvalidInputError
+from psorr.geometry.diameter import diameter
+
+
+def _on_ellipsoid(rng, n: int) -> np.ndarray:
+    """(n, 3) points on an ellipsoid of semi-axes 30, 21 and 15 mm: every one a corner of their hull."""
+    directions = rng.normal(size=(n, 3))
+    return directions / np.linalg.norm(directions, axis=1, keepdims=True) * (0.03, 0.021, 0.015)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_the_diameter_of_thousands_of_hull_corners_is_every_pairs_longest(seed):
+    points = _on_ellipsoid(np.random.default_rng(seed), 5000)
+    assert diameter(points) == pytest.approx(pdist(points).max(), rel=1e-12)
+
+
+def test_a_ball_and_a_flat_or_small_set_are_measured_exactly():
+    rng = np.random.default_rng(3)
+    ball = rng.normal(size=(4000, 3))
+    ball /= np.linalg.norm(ball, axis=1, keepdims=True)
+    flat = np.column_stack([rng.uniform(size=(300, 2)), np.zeros(300)])
+    for points in (ball, flat, rng.uniform(size=(40, 3)), np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 2.0]])):
+        assert diameter(points) == pytest.approx(pdist(points).max(), rel=1e-12)
+
+
+def test_a_finely_tessellated_smooth_part_is_measured_in_bounded_memory():
+    points = _on_ellipsoid(np.random.default_rng(4), 200_000)  # all pairs at once: 160 GB
+    assert diameter(points) == pytest.approx(0.06, rel=1e-3)
+
+
+def test_fewer_than_two_points_are_refused():
+    with pytest.raises(InvalidInputError, match="at least two 3-D points"):
+        diameter(np.zeros((1, 3)))
