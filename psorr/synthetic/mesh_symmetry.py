@@ -138,8 +138,10 @@ def candidate_axes(mesh: trimesh.Trimesh, facet_axes: int) -> list[np.ndarray]:
     return axes
 
 
-def _closed_group(turns: list[np.ndarray], tolerance: float) -> list[np.ndarray]:
-    """The turns (4, 4) closed under composition, identity first; equal within ``tolerance`` (model units)."""
+def _closed_group(turns: list[np.ndarray], tolerance: float, holds) -> list[np.ndarray]:
+    """The turns (4, 4) closed under composition, identity first; equal within ``tolerance`` (model units).
+    A product joins only if ``holds(S)``: turns kept within the tolerance compose into turns that may not be
+    (a flip 1.8 degrees off an exact one passes on a smooth part; their products spin it by 3.6, 7.2, ...)."""
     group = [np.eye(4)]
 
     def known(S):
@@ -149,7 +151,7 @@ def _closed_group(turns: list[np.ndarray], tolerance: float) -> list[np.ndarray]
     frontier = [S for S in turns if not known(S)]
     while frontier and len(group) < 200:
         S = frontier.pop()
-        if known(S):
+        if known(S) or not holds(S):
             continue
         group.append(S)
         frontier += [S @ G for G in group] + [G @ S for G in group]
@@ -183,10 +185,11 @@ def find_symmetries(mesh: trimesh.Trimesh, params: SymmetryParams | None = None)
         turns += [S for n in range(2, p.max_order + 1) if surface.largest(points, S := _about(
             axis, 2 * np.pi / n, centre)) <= limit]
     if continuous is not None:
-        turns = [S for S in turns if S[:3, :3] @ continuous @ continuous < 1 - 1e-6]  # not the spins about it
-        return MeshSymmetry(np.array([np.eye(4), *_flips(continuous, _closed_group(turns, limit))]), continuous,
-                            centre)
-    return MeshSymmetry(np.array(_closed_group(turns, limit)), None, centre)
+        # Every other turn of a surface of revolution turns its axis end for end, and all such differ by a
+        # spin about it: one flip found is all of them, with no group to close.
+        return MeshSymmetry(np.array([np.eye(4), *_flips(continuous, turns)]), continuous, centre)
+    return MeshSymmetry(np.array(_closed_group(turns, limit, lambda S: surface.largest(points, S) <= limit)), None,
+                        centre)
 
 
 def mesh_symmetric_add(points_model, T_est, T_true, symmetry: MeshSymmetry) -> float:

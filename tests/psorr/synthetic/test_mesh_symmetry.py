@@ -11,7 +11,14 @@ from part_meshes import box, cylinder, ellipsoid, flanged_bushing, l_bracket, pl
 from psorr.errors import InvalidInputError
 from psorr.geometry.rotations import turn
 from psorr.synthetic.catalog import load_catalog, model_diameter, symmetric_add
-from psorr.synthetic.mesh_symmetry import MeshSymmetry, SymmetryParams, find_symmetries, mesh_symmetric_add
+from psorr.synthetic.mesh_symmetry import (
+    MeshSymmetry,
+    SymmetryParams,
+    _about,
+    _closed_group,
+    find_symmetries,
+    mesh_symmetric_add,
+)
 
 CATALOG = load_catalog()
 
@@ -53,6 +60,29 @@ def test_a_cylinder_turns_freely_about_its_axis_and_flips_end_for_end():
     assert symmetry.axis is not None and abs(symmetry.axis[2]) == pytest.approx(1.0)
     assert len(symmetry.turns) == 2
     assert symmetry.turns[1][:3, :3] @ symmetry.axis @ symmetry.axis == pytest.approx(-1.0)
+
+
+def test_a_long_faceted_rod_read_from_a_file_flips_without_closing_a_group(tmp_path, recwarn):
+    # Its 64 side facets each give a half turn across the axis; composed, they spin it by every multiple of
+    # 5.6 degrees, a group of hundreds whose products overflowed. One flip is all a continuous axis needs.
+    trimesh.creation.cylinder(radius=0.004, height=0.15, sections=64).export(tmp_path / "rod.stl")
+    symmetry = find_symmetries(trimesh.load(tmp_path / "rod.stl"))
+    assert len(symmetry.turns) == 2 and abs(symmetry.axis[2]) == pytest.approx(1.0)
+    assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]
+
+
+def test_turns_within_the_tolerance_compose_only_into_turns_that_hold():
+    # An exact half turn about y and one 1.8 degrees off it (both within a smooth part's tolerance) compose
+    # into spins about x by 3.6 degrees and its multiples; only those that map the part onto itself join.
+    flip, near = (_about(axis, np.pi, np.zeros(3)) for axis in ((0.0, 1.0, 0.0), (0.0, 0.9995, 0.0314)))
+    exact_or_near = {0.0, 180.0}
+
+    def holds(S):
+        angle = np.degrees(np.arccos(np.clip((np.trace(S[:3, :3]) - 1) / 2, -1, 1)))
+        return any(abs(angle - a) < 2.0 for a in exact_or_near)
+
+    group = _closed_group([flip, near], 1e-4, holds)
+    assert len(group) < 10 and all(holds(S) for S in group)
 
 
 def test_a_flanged_bushing_turns_freely_but_does_not_flip():
