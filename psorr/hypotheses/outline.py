@@ -22,6 +22,7 @@ import trimesh
 from psorr.checks import params as check
 from psorr.geometry.distance_field import DistanceField
 from psorr.hypotheses.candidates import Candidate, CandidateSet
+from psorr.hypotheses.same_surface import SameSurface
 from psorr.hypotheses.standing_patches import Patch, standing_grid, table_frame
 from psorr.types import PointCloud
 from psorr.verification.point_check import CheckParams
@@ -109,6 +110,13 @@ def _turns(angles: np.ndarray) -> np.ndarray:
     return R
 
 
+def _placed(angle: float, shift: np.ndarray) -> np.ndarray:
+    """(4, 4) the turn by ``angle`` (radians) about z, then the move by ``shift`` (3,)."""
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = _turns(np.array([angle]))[0], shift
+    return T
+
+
 def _square(centre: np.ndarray, span: np.ndarray) -> np.ndarray:
     """(S, 3) the points ``centre`` (3,) + (a, b, 0) for every a and b in ``span``: shifts on the table."""
     return centre + np.stack(np.meshgrid(span, span, [0.0], indexing="ij"), -1).reshape(-1, 3)
@@ -162,6 +170,7 @@ class OutlineMatcher:
                 self.shapes.append(RestingShape(index, T, np.linalg.inv(T), _subset(seen, self._SILHOUETTE_SAMPLES),
                                                 rest.height, float(np.linalg.norm(seen, axis=1).max())))
         self.tallest = max((shape.height for shape in self.shapes), default=0.0) + params.height_slack
+        self.same = SameSurface(models)
 
     def candidates(self, cloud: PointCloud, view) -> CandidateSet:
         """Poses of the resting models over the patches standing on ``view``'s supporting plane in ``cloud``."""
@@ -224,8 +233,13 @@ class OutlineMatcher:
                 else:
                     peaks.append((cost, shape, angles[a], shifts[k]))
         peaks.sort(key=lambda peak: peak[0])
-        refined = [self._refined(patch, *peak[1:]) for peak in peaks[:p.max_candidates] if peak[0] <= p.max_cost]
-        return [pose for pose in refined if pose[0] <= p.max_cost]
+        # A part's symmetric rests (a rod on any side facet) fit alike: one of each goes on, before and after
+        # refinement, so that copies neither crowd out other poses nor cost acceptance a fit each.
+        peaks = self.same.distinct([peak for peak in peaks if peak[0] <= p.max_cost], lambda peak: peak[1].model,
+                                   lambda peak: _placed(peak[2], peak[3]) @ peak[1].T_table_model, p.max_candidates)
+        refined = [self._refined(patch, *peak[1:]) for peak in peaks]
+        return self.same.distinct([pose for pose in refined if pose[0] <= p.max_cost], lambda pose: pose[1],
+                                  lambda pose: pose[2])
 
     def _closer(self, patch: Patch, shape: RestingShape, angle: float, shift: np.ndarray, step: float,
                 points: np.ndarray) -> tuple[float, np.ndarray]:
@@ -258,9 +272,7 @@ class OutlineMatcher:
         moves = _square(shift, span)
         fine = self._costs(patch, shape, turns, moves, _subset(patch.points, self._FINE_POINTS))
         i, j = np.unravel_index(np.argmin(fine), fine.shape)
-        T = np.eye(4)
-        T[:3, :3], T[:3, 3] = _turns(turns[i:i + 1])[0], moves[j]
-        return float(fine[i, j]), shape.model, T @ shape.T_table_model
+        return float(fine[i, j]), shape.model, _placed(turns[i], moves[j]) @ shape.T_table_model
 
     def _costs(self, patch: Patch, shape: RestingShape, angles: np.ndarray, shifts: np.ndarray,
                points: np.ndarray) -> np.ndarray:

@@ -25,6 +25,7 @@ import open3d as o3d
 import trimesh
 
 from psorr.errors import InvalidInputError
+from psorr.geometry import surface_moments
 from psorr.geometry.rotations import turn
 from psorr.synthetic.catalog import CONTINUOUS_STEP_DEG, model_diameter, symmetric_add
 
@@ -112,17 +113,13 @@ class _SurfaceDistance:
 
 def area_centroid(mesh: trimesh.Trimesh) -> np.ndarray:
     """(3,) the centroid of the mesh's surface, weighted by triangle area (fixed by every symmetry)."""
-    return np.average(mesh.triangles_center, axis=0, weights=mesh.area_faces)
+    return surface_moments.area_centroid(mesh.vertices, mesh.faces)
 
 
 def principal_axes(mesh: trimesh.Trimesh) -> np.ndarray:
     """(3, 3) columns: the principal axes of the mesh's surface (its area's second moments about the area
     centroid, exact per triangle, so an exact symmetry axis comes out exact), smallest moment first."""
-    triangles = mesh.triangles - area_centroid(mesh)
-    corners = np.einsum("fki,fkj->fij", triangles, triangles)
-    total = triangles.sum(axis=1)
-    moments = np.einsum("f,fij->ij", mesh.area_faces, corners + np.einsum("fi,fj->fij", total, total)) / 12.0
-    return np.linalg.eigh(moments)[1]
+    return np.linalg.eigh(surface_moments.second_moments(mesh.vertices, mesh.faces))[1]
 
 
 def candidate_axes(mesh: trimesh.Trimesh, facet_axes: int) -> list[np.ndarray]:
