@@ -29,9 +29,9 @@ class SameSurface:
         self._renderers: dict[int, DepthRenderer] = {}
         self._centres = [area_centroid(m.vertices, m.faces) for m in self._models]
         self._moments = [second_moments(m.vertices, m.faces) for m in self._models]
-        # A surface whose every point x moves by d, at most the facet distance, changes its second moments
-        # mean(x x^T) by at most 2 |mean(x d^T)| <= 2 sqrt(mean |x|^2) max |d| (Cauchy-Schwarz).
-        self._moment_slack = [2.0 * np.sqrt(np.trace(M)) * FACET_DISTANCE for M in self._moments]
+        # A surface whose every point x moves by d, at most the facet distance f, changes its second moments
+        # mean(x x^T) by at most 2 |mean(x d^T)| + |mean(d d^T)| <= 2 sqrt(mean |x|^2) f + f^2 (Cauchy-Schwarz).
+        self._moment_slack = [2.0 * np.sqrt(np.trace(M)) * FACET_DISTANCE + FACET_DISTANCE**2 for M in self._moments]
 
     def same(self, model: int, T_a: np.ndarray, T_b: np.ndarray) -> bool:
         """Whether poses ``T_a`` and ``T_b`` (4, 4; model -> any frame) of model ``model`` coincide."""
