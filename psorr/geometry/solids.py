@@ -33,5 +33,6 @@ def is_closed(mesh: trimesh.Trimesh) -> bool:
 
 
 def open_edges(mesh: trimesh.Trimesh) -> int:
-    """How many edges border one face only: the rim of a hole."""
-    return int(np.sum(edge_balance(mesh)[0] == 1))
+    """How many edges border an odd number of faces: the rim of a hole (one face), or where a sheet meets a
+    solid (three). A mesh without any that is still not closed has faces wound against their neighbours."""
+    return int(np.sum(edge_balance(mesh)[0] % 2 == 1))

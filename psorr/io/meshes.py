@@ -99,8 +99,9 @@ def _wound_outward(path: Path, mesh):
                                        "neighbours), and a model takes its normals from the winding",
                                  "re-orient the faces coherently (trimesh.repair.fix_normals, or MeshLab's 'Re-Orient "
                                  "all faces coherently') and export it again")
-        warnings.warn(f"{path}: the mesh is not closed ({holes} edges border one face only), so nothing tells "
-                      "which way is out: its normals are taken from the faces' winding as exported, and a surface "
+        warnings.warn(f"{path}: the mesh is not closed ({holes} edges border one face or three: a hole's rim or a "
+                      "sheet's edge), so nothing tells which way is out: its normals are taken from the faces' "
+                      "winding as exported, and a surface "
                       "with no back is trained as it is; export the part as a closed solid (watertight STL) to "
                       "silence this", stacklevel=3)
         return mesh

@@ -89,8 +89,8 @@ def upright_mesh(part: MeshPart) -> trimesh.Trimesh:
             raise PartMeshError(part.path, str(exc).removeprefix(f"{part.path}: "),
                                 "re-export it as STL, OBJ or PLY") from None
     if not is_closed(mesh):  # a solid; bodies touching along an edge of four faces are one
-        raise PartMeshError(part.path, f"is not closed ({open_edges(mesh)} edges border a hole): the cell needs its "
-                            "volume for the mass and a solid for collisions",
+        raise PartMeshError(part.path, f"is not closed ({open_edges(mesh)} edges border a hole or a sheet): the cell "
+                            "needs its volume for the mass and a solid for collisions",
                             "close it (e.g. trimesh.repair.fill_holes, or MeshLab's Close Holes) and export again")
     for warning in heard:
         warnings.warn_explicit(warning.message, warning.category, warning.filename, warning.lineno)

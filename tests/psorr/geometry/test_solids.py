@@ -51,3 +51,14 @@ def test_such_a_part_is_read_without_a_word_and_rests_on_its_own_centre_of_mass(
     _, expected = trimesh.poses.compute_stable_poses(read, center_mass=read.center_mass)
     found = [rest.probability for rest in stable_rests(read)]
     assert sorted(found) == pytest.approx(sorted(expected), abs=1e-6)
+
+
+def test_a_sheet_on_a_solid_is_open_and_read_with_a_warning_not_refused(tmp_path):
+    box = trimesh.creation.box((0.04, 0.03, 0.02))
+    a, b = box.edges_unique[0]
+    fin = np.append(box.vertices, [box.vertices[a] + (0.0, 0.0, 0.03)], axis=0)  # a fin on one of its edges
+    finned = trimesh.Trimesh(fin, np.append(box.faces, [[a, b, len(box.vertices)]], axis=0), process=False)
+    assert not is_closed(finned) and open_edges(finned) == 3  # the edge it shares (three faces), and its own two
+    finned.export(tmp_path / "finned.stl")
+    with pytest.warns(UserWarning, match="finned.stl: the mesh is not closed"):
+        read_mesh(tmp_path / "finned.stl")
