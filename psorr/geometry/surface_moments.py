@@ -19,16 +19,19 @@ def _triangles(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.
 
 def area_centroid(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     """(3,) the centroid of the surface of (V, 3) ``vertices`` and (F, 3) ``faces``, weighted by triangle area."""
-    triangles, areas = _triangles(vertices, faces)
-    return np.average(triangles.mean(axis=1), axis=0, weights=areas)
+    return _centroid(*_triangles(vertices, faces))
 
 
 def second_moments(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     """(3, 3) the surface's second moments about its area centroid, per unit area (the points' unit squared):
     the mean of x x^T over the surface, exactly per triangle."""
     triangles, areas = _triangles(vertices, faces)
-    triangles = triangles - area_centroid(vertices, faces)
+    triangles = triangles - _centroid(triangles, areas)
     corners = np.einsum("fki,fkj->fij", triangles, triangles)
     total = triangles.sum(axis=1)
     per_triangle = (corners + np.einsum("fi,fj->fij", total, total)) / 12.0
     return np.einsum("f,fij->ij", areas, per_triangle) / areas.sum()
+
+
+def _centroid(triangles: np.ndarray, areas: np.ndarray) -> np.ndarray:
+    return np.average(triangles.mean(axis=1), axis=0, weights=areas)

@@ -22,22 +22,32 @@ _SAMPLES = 300
 
 
 class SameSurface:
-    """Tells whether two poses of a model coincide; built once per set of models (renderers made on demand)."""
+    """Tells whether two poses of a model coincide; built once per set of models, each model's surface
+    measured and rendered on first need."""
 
     def __init__(self, models):
         self._models = list(models)
         self._renderers: dict[int, DepthRenderer] = {}
-        self._centres = [area_centroid(m.vertices, m.faces) for m in self._models]
-        self._moments = [second_moments(m.vertices, m.faces) for m in self._models]
-        # A surface whose every point x moves by d, at most the facet distance f, changes its second moments
-        # mean(x x^T) by at most 2 |mean(x d^T)| + |mean(d d^T)| <= 2 sqrt(mean |x|^2) f + f^2 (Cauchy-Schwarz).
-        self._moment_slack = [2.0 * np.sqrt(np.trace(M)) * FACET_DISTANCE + FACET_DISTANCE**2 for M in self._moments]
+        self._moments: dict[int, tuple[np.ndarray, np.ndarray, float]] = {}
+
+    def _surface(self, model: int) -> tuple[np.ndarray, np.ndarray, float]:
+        """Model ``model``'s area centroid (3,), second moments (3, 3) and their slack, on first need (a model
+        with no pose to compare costs nothing at start-up)."""
+        if model not in self._moments:
+            m = self._models[model]
+            moments = second_moments(m.vertices, m.faces)
+            # A surface whose every point x moves by d, at most the facet distance f, changes its second
+            # moments mean(x x^T) by at most 2 |mean(x d^T)| + |mean(d d^T)| <= 2 sqrt(mean |x|^2) f + f^2
+            # (Cauchy-Schwarz).
+            slack = 2.0 * np.sqrt(np.trace(moments)) * FACET_DISTANCE + FACET_DISTANCE**2
+            self._moments[model] = (area_centroid(m.vertices, m.faces), moments, slack)
+        return self._moments[model]
 
     def same(self, model: int, T_a: np.ndarray, T_b: np.ndarray) -> bool:
         """Whether poses ``T_a`` and ``T_b`` (4, 4; model -> any frame) of model ``model`` coincide."""
         (centre_a, moment_a), (centre_b, moment_b) = self._placed(model, T_a), self._placed(model, T_b)
         return bool(np.linalg.norm(centre_a - centre_b) <= FACET_DISTANCE
-                    and np.linalg.norm(moment_a - moment_b) <= self._moment_slack[model]
+                    and np.linalg.norm(moment_a - moment_b) <= self._surface(model)[2]
                     and self._maps_onto_itself(model, np.linalg.solve(T_a, T_b)))
 
     def distinct(self, poses: list, model_of, pose_of, limit: int | None = None) -> list:
@@ -51,7 +61,7 @@ class SameSurface:
             if kept:  # the kept poses that could be this one, all at once; rendered only if any
                 could = ((np.asarray(models) == model)
                          & (np.linalg.norm(np.asarray(centres) - centre, axis=1) <= FACET_DISTANCE)
-                         & (np.linalg.norm(np.asarray(moments) - moment, axis=(1, 2)) <= self._moment_slack[model]))
+                         & (np.linalg.norm(np.asarray(moments) - moment, axis=(1, 2)) <= self._surface(model)[2]))
                 if any(self._maps_onto_itself(model, np.linalg.solve(pose_of(kept[k]), T))
                        for k in np.flatnonzero(could)):
                     continue
@@ -65,8 +75,9 @@ class SameSurface:
 
     def _placed(self, model: int, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Where pose ``T`` puts the model's area centroid (3,), and its second moments (3, 3) there."""
+        centre, moments, _ = self._surface(model)
         R = T[:3, :3]
-        return R @ self._centres[model] + T[:3, 3], R @ self._moments[model] @ R.T
+        return R @ centre + T[:3, 3], R @ moments @ R.T
 
     def _maps_onto_itself(self, model: int, S: np.ndarray) -> bool:
         m = self._models[model]
