@@ -36,3 +36,9 @@ def open_edges(mesh: trimesh.Trimesh) -> int:
     """How many edges border an odd number of faces: the rim of a hole (one face), or where a sheet meets a
     solid (three). A mesh without any that is still not closed has faces wound against their neighbours."""
     return int(np.sum(edge_balance(mesh)[0] % 2 == 1))
+
+
+def centre_of_mass(mesh: trimesh.Trimesh) -> np.ndarray:
+    """(3,) the solid's centre of mass, uniform density; for a mesh that bounds none (it has holes), its convex
+    hull's, since the volume integral of an open surface means nothing."""
+    return np.asarray(mesh.center_mass if is_closed(mesh) else mesh.convex_hull.center_mass)

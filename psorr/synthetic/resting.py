@@ -16,7 +16,7 @@ import trimesh
 from scipy.spatial import ConvexHull, QhullError
 
 from psorr.errors import InvalidInputError, PsorrError
-from psorr.geometry.solids import is_closed
+from psorr.geometry.solids import centre_of_mass
 
 
 @dataclass(frozen=True, eq=False)
@@ -47,12 +47,6 @@ PROBABILITY_DIGITS = 6
 def _mesh_key(mesh: trimesh.Trimesh) -> str:
     return hashlib.sha1(np.ascontiguousarray(mesh.vertices).tobytes() + np.ascontiguousarray(mesh.faces).tobytes()
                         ).hexdigest()
-
-
-def _centre_of_mass(mesh: trimesh.Trimesh) -> np.ndarray:
-    """The solid's centre of mass (a mesh whose bodies touch along an edge bounds one too); for a mesh with
-    holes, its convex hull's, since the volume integral of an open surface means nothing."""
-    return np.asarray(mesh.center_mass if is_closed(mesh) else mesh.convex_hull.center_mass)
 
 
 def _outline(points: np.ndarray) -> np.ndarray:
@@ -87,7 +81,7 @@ def stable_rests(mesh: trimesh.Trimesh) -> tuple[Rest, ...]:
             raise PsorrError("resting poses need networkx (trimesh.poses.compute_stable_poses): "
                              "pip install networkx") from exc
         with np.errstate(invalid="ignore"):  # trimesh takes square roots of rounding-negative numbers
-            transforms, probabilities = trimesh.poses.compute_stable_poses(mesh, center_mass=_centre_of_mass(mesh))
+            transforms, probabilities = trimesh.poses.compute_stable_poses(mesh, center_mass=centre_of_mass(mesh))
         if len(probabilities) == 0:
             raise InvalidInputError("trimesh found no stable resting pose for the mesh; is it a closed solid?")
         probabilities = np.asarray(probabilities) / np.sum(probabilities)

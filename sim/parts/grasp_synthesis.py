@@ -27,7 +27,7 @@ import trimesh
 
 from psorr.checks import params as check
 from psorr.errors import InvalidInputError
-from psorr.geometry.solids import is_closed
+from psorr.geometry.solids import centre_of_mass
 from sim.errors import SimInputError
 from sim.parts.grasp import Grasp
 from sim.parts.gripper_fit import Fit, Frames, Surface, ahead, distinct, measure, perturbed_share, unique
@@ -287,5 +287,5 @@ def _cone_deg(params: GraspSynthesisParams) -> float:
 
 def _off_centre(frames: Frames, mesh: trimesh.Trimesh) -> np.ndarray:
     """(F,) horizontal distance of each tool point from the centre of mass, in footprint half-diagonals."""
-    com = mesh.center_mass if is_closed(mesh) else mesh.convex_hull.center_mass
+    com = centre_of_mass(mesh)
     return np.hypot(*(frames.origins[:, :2] - com[:2]).T) / (0.5 * np.hypot(*mesh.extents[:2]))
