@@ -1,34 +1,28 @@
 """The diameter of a point set: the largest distance between two of its points, exactly, in bounded memory.
 
-The farthest pair lies on the convex hull, usually a small share of a mesh's vertices; but every vertex of a
-smooth convex part (a finely tessellated knob, a ball) is a hull corner, and all their pairs at once would
-take N^2 / 2 distances (100 GB for 160,000 corners). A pair no longer than a known one is passed over: with
-the hull's centroid c and R its largest distance to a corner, no pair through a corner p is longer than
-|p - c| + R, so only corners with |p - c| + R above the longest pair found by a few farthest-point sweeps can
-do better, and only pairs of those are measured, a block at a time.
+All pairs at once would take N^2 / 2 distances (100 GB for the 160,000 vertices of a finely tessellated
+knob or ball), and on a ball every vertex is a corner of the hull, so the hull does not thin them either.
+With offsets x and y of two points from a centre, the parallelogram law gives |x + y|^2 = 2|x|^2 + 2|y|^2
+- |x - y|^2. A pair longer than a known length L through point y must therefore end within
+sqrt(2 R^2 + 2|y|^2 - L^2) of -y, R the largest offset: a small ball about the antipode, found in a k-d
+tree. L starts as the longest of a few farthest-point sweeps, which on most shapes is already the diameter,
+and grows as pairs are measured; points are taken farthest from the centre first, and once a point's ball
+is empty, so are those of all nearer ones.
 """
 
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial import ConvexHull, QhullError
-from scipy.spatial.distance import cdist, pdist
+from scipy.spatial import cKDTree
+from scipy.spatial.distance import pdist
 
 from psorr.errors import InvalidInputError
 
-_BLOCK = 2048  # corners measured against the rest at a time: 2048 x N distances in memory
+_ALL_PAIRS = 2048  # up to this many points every pair is measured: 2 million distances
+_QUERIES = 4096  # points whose antipodal balls are searched at a time...
+_PAIRS = 4_000_000  # ...and at most about this many pairs they hold measured at a time
 _SWEEPS = 4  # farthest-point sweeps for the first lower bound
-
-
-def hull_corners(points: np.ndarray) -> np.ndarray:
-    """The corners of the convex hull of (N, 3) ``points``; all of them when they are flat or degenerate."""
-    try:
-        return points[ConvexHull(points).vertices]
-    except QhullError:
-        try:  # flat: joggled, the hull still names the extreme points
-            return points[ConvexHull(points, qhull_options="QJ").vertices]
-        except QhullError:
-            return points
+_SLACK = 1e-9  # relative: the balls are widened by rounding's worth, so that no pair on their rim is lost
 
 
 def diameter(points) -> float:
@@ -36,16 +30,38 @@ def diameter(points) -> float:
     points = np.asarray(points, dtype=np.float64)
     if points.ndim != 2 or points.shape[1] != 3 or len(points) < 2:
         raise InvalidInputError(f"a diameter needs at least two 3-D points, got shape {points.shape}")
-    corners = hull_corners(points)
-    if len(corners) <= _BLOCK:
-        return float(pdist(corners).max())
-    best = _swept(corners)
-    centre = corners.mean(axis=0)
-    reach = np.linalg.norm(corners - centre, axis=1)
-    hopeful = corners[reach + reach.max() > best]
-    for start in range(0, len(hopeful), _BLOCK):
-        best = max(best, float(cdist(hopeful[start:start + _BLOCK], hopeful[start:]).max()))
+    points = np.unique(points, axis=0)  # an unmerged mesh repeats its vertices; each copy would be searched
+    if len(points) < 2:
+        return 0.0
+    if len(points) <= _ALL_PAIRS:
+        return float(pdist(points).max())
+    offsets = points - 0.5 * (points.min(axis=0) + points.max(axis=0))
+    reach = np.linalg.norm(offsets, axis=1)
+    widest, best = float(reach.max()), _swept(points)
+    tree = cKDTree(offsets)
+    order, start = np.argsort(-reach, kind="stable"), 0
+    while start < len(order):
+        block = order[start:start + _QUERIES]
+        squared = 2 * widest**2 + 2 * reach[block] ** 2 - best**2  # non-increasing along the block
+        block = block[squared > 0]
+        if not len(block):
+            break  # the farthest point left has an empty ball, and so has every nearer one
+        radii = np.sqrt(squared[squared > 0]) * (1 + _SLACK) + _SLACK * widest
+        counts = tree.query_ball_point(-offsets[block], radii, return_length=True)
+        taken = max(1, int(np.searchsorted(np.cumsum(counts), _PAIRS, side="right")))
+        best = max(best, _longest(tree, offsets, block[:taken], radii[:taken], counts[:taken]))
+        start += taken
     return best
+
+
+def _longest(tree: cKDTree, offsets: np.ndarray, block: np.ndarray, radii: np.ndarray, counts: np.ndarray) -> float:
+    """The longest pair between each of the ``block`` points and the points in its antipodal ball (0 if none)."""
+    if not counts.sum():
+        return 0.0
+    found = tree.query_ball_point(-offsets[block], radii, return_sorted=False)
+    ends = np.concatenate([np.asarray(f, dtype=np.int64) for f in found])
+    starts = np.repeat(block, counts)
+    return float(np.linalg.norm(offsets[ends] - offsets[starts], axis=1).max())
 
 
 def _swept(points: np.ndarray) -> float:

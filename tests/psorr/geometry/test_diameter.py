@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+import trimesh
 from scipy.spatial.distance import pdist
 
 from psorr.errors import InvalidInputError
@@ -32,6 +33,20 @@ def test_a_ball_and_a_flat_or_small_set_are_measured_exactly():
 def test_a_finely_tessellated_smooth_part_is_measured_in_bounded_memory():
     points = _on_ellipsoid(np.random.default_rng(4), 200_000)  # all pairs at once: 160 GB
     assert diameter(points) == pytest.approx(0.06, rel=1e-3)
+
+
+def test_a_ball_whose_every_vertex_is_a_hull_corner_is_measured_exactly():
+    # Every vertex of a geodesic ball is a hull corner and every pair through the centre a diameter: the
+    # hull prunes nothing and every bound ties, the worst case for a search that passes over pairs.
+    vertices = trimesh.creation.icosphere(subdivisions=7, radius=0.03).vertices  # 163,842 vertices
+    assert diameter(vertices) == pytest.approx(0.06, rel=1e-12)
+
+
+def test_repeated_points_are_measured_once():
+    rng = np.random.default_rng(5)
+    distinct = rng.uniform(size=(10, 3))
+    assert diameter(np.repeat(distinct, 1000, axis=0)) == pytest.approx(pdist(distinct).max(), rel=1e-12)
+    assert diameter(np.zeros((5, 3))) == 0.0
 
 
 def test_fewer_than_two_points_are_refused():
