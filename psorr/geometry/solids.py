@@ -42,3 +42,10 @@ def centre_of_mass(mesh: trimesh.Trimesh) -> np.ndarray:
     """(3,) the solid's centre of mass, uniform density; for a mesh that bounds none (it has holes), its convex
     hull's, since the volume integral of an open surface means nothing."""
     return np.asarray(mesh.center_mass if is_closed(mesh) else mesh.convex_hull.center_mass)
+
+
+def signed_volume(mesh: trimesh.Trimesh) -> float:
+    """The volume ``mesh``'s faces enclose, negative when they are wound inward (m^3 for a mesh in metres): the
+    divergence theorem's sum of one triple product per face, without the inertia trimesh's ``volume`` computes."""
+    a, b, c = (mesh.vertices[mesh.faces[:, k]] for k in range(3))
+    return float(np.einsum("ij,ij->", a, np.cross(b, c)) / 6.0)

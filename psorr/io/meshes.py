@@ -42,7 +42,7 @@ def read_mesh(path) -> trimesh.Trimesh:
     try:
         # Unprocessed first: processing drops the faces of NaN or inf vertices without a word.
         scene = trimesh.load_scene(path, process=False)
-        mesh = scene.to_mesh()  # what trimesh.load(force="mesh") does
+        mesh = _one_mesh(scene)
     except Exception as exc:  # trimesh's many loaders raise many exception types
         raise CloudFileError(path, f"cannot be read as a mesh: {type(exc).__name__}: {exc}",
                              "re-export it as STL, OBJ or PLY") from None
@@ -72,6 +72,22 @@ def read_mesh(path) -> trimesh.Trimesh:
     return _wound_outward(path, mesh)
 
 
+def _one_mesh(scene):
+    """The scene's meshes, placed and concatenated into one, as trimesh.load(force="mesh") gives them; a scene
+    of one mesh gives that mesh, placed, without the two copies that take a third of a large file's read."""
+    import trimesh
+
+    nodes = scene.graph.nodes_geometry
+    if len(nodes) == 1:
+        T, name = scene.graph[nodes[0]]
+        mesh = scene.geometry[name]
+        if isinstance(mesh, trimesh.Trimesh):
+            if not np.array_equal(T, np.eye(4)):
+                mesh.apply_transform(T)
+            return mesh
+    return scene.to_mesh()
+
+
 def _object_names(path: Path, scene) -> list[str]:
     """The names of the meshes a file holds: trimesh's, or for an OBJ its ``o`` objects, which trimesh's
     loader merges into one mesh unless their materials differ."""
@@ -90,7 +106,7 @@ def _wound_outward(path: Path, mesh):
     nowhere, and one with a third of its faces flipped scored lower, without a word. Only a closed mesh has
     an inside to tell outward from (bodies touching along an edge of four faces included:
     :func:`psorr.geometry.solids.is_closed`); an open one is taken as it is, and said."""
-    from psorr.geometry.solids import is_closed, open_edges
+    from psorr.geometry.solids import is_closed, open_edges, signed_volume
 
     if not is_closed(mesh):
         holes = open_edges(mesh)
@@ -105,7 +121,7 @@ def _wound_outward(path: Path, mesh):
                       "with no back is trained as it is; export the part as a closed solid (watertight STL) to "
                       "silence this", stacklevel=3)
         return mesh
-    if mesh.volume < 0:
+    if signed_volume(mesh) < 0:
         warnings.warn(f"{path}: the mesh is inside out (every face is wound inward); trained turned right side out; "
                       "re-export it with outward normals to silence this", stacklevel=3)
         mesh = mesh.copy()

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from psorr.geometry.solids import is_closed, open_edges
+from psorr.geometry.solids import is_closed, open_edges, signed_volume
 from psorr.io.meshes import read_mesh
 from psorr.synthetic.resting import stable_rests
 
@@ -62,3 +62,13 @@ def test_a_sheet_on_a_solid_is_open_and_read_with_a_warning_not_refused(tmp_path
     finned.export(tmp_path / "finned.stl")
     with pytest.warns(UserWarning, match="finned.stl: the mesh is not closed"):
         read_mesh(tmp_path / "finned.stl")
+
+
+def test_the_signed_volume_is_the_enclosed_volume_and_negative_inside_out():
+    box = trimesh.creation.box(extents=(0.02, 0.03, 0.04))
+    assert signed_volume(box) == pytest.approx(0.02 * 0.03 * 0.04, rel=1e-12)
+    inside_out = box.copy()
+    inside_out.invert()
+    assert signed_volume(inside_out) == pytest.approx(-0.02 * 0.03 * 0.04, rel=1e-12)
+    ball = trimesh.creation.icosphere(subdivisions=3, radius=0.05)
+    assert signed_volume(ball) == pytest.approx(ball.volume, rel=1e-12)
