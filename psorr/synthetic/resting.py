@@ -42,6 +42,13 @@ _RESTS: dict[str, tuple[Rest, ...]] = {}
 # part's copies of one rest differ by 1e-10 and less (rounding that differs between CPUs). Two distinct rests
 # closer than this are ordered by direction too, which changes only which draw gives which.
 PROBABILITY_DIGITS = 6
+# A compute budget, not a shape constant: trimesh's stable poses take time superlinear in the hull's faces
+# (a 1024-sided cylinder 3 s, a 5120-face ball 11 s; a 327,000-face ball, every facet a rest, hours). A hull
+# of more faces than HULL_FACES is replaced by the hull of its extreme vertices in SUPPORT_DIRECTIONS spread
+# directions, which lies within a few thousandths of the part's radius of it. The 45 Prusa parts' hulls have
+# at most 772 faces, so their rests are trimesh's on their own hulls (docs/decisions/0075).
+HULL_FACES = 1024
+SUPPORT_DIRECTIONS = 512
 
 
 def _mesh_key(mesh: trimesh.Trimesh) -> str:
@@ -80,14 +87,33 @@ def stable_rests(mesh: trimesh.Trimesh) -> tuple[Rest, ...]:
         except ImportError as exc:
             raise PsorrError("resting poses need networkx (trimesh.poses.compute_stable_poses): "
                              "pip install networkx") from exc
+        hull = _resting_hull(mesh)
         with np.errstate(invalid="ignore"):  # trimesh takes square roots of rounding-negative numbers
-            transforms, probabilities = trimesh.poses.compute_stable_poses(mesh, center_mass=centre_of_mass(mesh))
+            transforms, probabilities = trimesh.poses.compute_stable_poses(hull, center_mass=centre_of_mass(mesh))
         if len(probabilities) == 0:
             raise InvalidInputError("trimesh found no stable resting pose for the mesh; is it a closed solid?")
         probabilities = np.asarray(probabilities) / np.sum(probabilities)
         order = _canonical_order(np.asarray(transforms), probabilities)
-        _RESTS[key] = tuple(_rest(transforms[k], probabilities[k], mesh) for k in order)
+        shape = mesh if hull is mesh else hull  # a simplified hull's outlines and heights: one vertex set, not 160,000
+        _RESTS[key] = tuple(_rest(transforms[k], probabilities[k], shape) for k in order)
     return _RESTS[key]
+
+
+def _resting_hull(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
+    """What the rests are found on: ``mesh`` itself (trimesh takes its convex hull) or, when that hull has more than
+    HULL_FACES faces, the hull of its extreme vertices in SUPPORT_DIRECTIONS directions spread over the sphere."""
+    hull = mesh.convex_hull
+    if len(hull.faces) <= HULL_FACES:
+        return mesh
+    k = np.arange(SUPPORT_DIRECTIONS) + 0.5
+    up = 1.0 - 2.0 * k / SUPPORT_DIRECTIONS
+    turn = np.pi * (1.0 + np.sqrt(5.0)) * k  # the golden angle: an even spread (Fibonacci sphere)
+    across = np.sqrt(1.0 - up**2)
+    directions = np.column_stack([across * np.cos(turn), across * np.sin(turn), up])
+    # Row by row over a block of directions: one (512, N) product of a 160,000-vertex hull is 650 MB.
+    extremes = np.unique(np.concatenate([np.argmax(block @ hull.vertices.T, axis=1)
+                                         for block in np.array_split(directions, 16)]))
+    return trimesh.convex.convex_hull(hull.vertices[extremes])
 
 
 def _canonical_order(transforms: np.ndarray, probabilities: np.ndarray) -> np.ndarray:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import trimesh
 from part_meshes import box, l_bracket
 
 from psorr.errors import InvalidInputError
@@ -28,6 +29,22 @@ def test_each_rest_touches_the_table_and_centres_its_footprint():
         assert np.ptp(on_table[:, 2]) == pytest.approx(rest.height)
         assert np.allclose(rest.footprint.mean(axis=0), 0.0, atol=1e-12)
         assert np.allclose(np.linalg.det(rest.T_table_model[:3, :3]), 1.0)
+
+
+def test_a_finely_tessellated_round_part_rests_on_its_side_or_its_end():
+    # Each of a 2048-sided cylinder's side facets is a rest of its own: trimesh's stable poses, superlinear in
+    # the hull's faces, take its hull simplified (resting.HULL_FACES), and the rests stay the cylinder's.
+    mesh = trimesh.creation.cylinder(radius=0.01, height=0.08, sections=2048)
+    assert len(mesh.convex_hull.faces) > resting.HULL_FACES
+    rests = stable_rests(mesh)
+    assert len(rests) <= 2 * resting.SUPPORT_DIRECTIONS
+    lying = [r for r in rests if r.height == pytest.approx(0.02, rel=0.01)]
+    standing = [r for r in rests if r.height == pytest.approx(0.08, rel=0.01)]
+    assert len(lying) + len(standing) == len(rests)
+    assert sum(r.probability for r in lying) > sum(r.probability for r in standing) > 0
+    for rest in rests:  # on the table, on the part's own vertices
+        on_table = mesh.vertices @ rest.T_table_model[:3, :3].T + rest.T_table_model[:3, 3]
+        assert on_table[:, 2].min() == pytest.approx(0.0, abs=1e-4)
 
 
 def test_rests_are_drawn_by_their_probability():
