@@ -37,7 +37,7 @@ def diameter(points) -> float:
         return float(pdist(points).max())
     offsets = points - 0.5 * (points.min(axis=0) + points.max(axis=0))
     reach = np.linalg.norm(offsets, axis=1)
-    widest, best = float(reach.max()), _swept(points)
+    widest, (best, pair) = float(reach.max()), _swept(points)
     tree = cKDTree(offsets)
     order, start = np.argsort(-reach, kind="stable"), 0
     while start < len(order):
@@ -49,26 +49,35 @@ def diameter(points) -> float:
         radii = np.sqrt(squared[squared > 0]) * (1 + _SLACK) + _SLACK * widest
         counts = tree.query_ball_point(-offsets[block], radii, return_length=True)
         taken = max(1, int(np.searchsorted(np.cumsum(counts), _PAIRS, side="right")))
-        best = max(best, _longest(tree, offsets, block[:taken], radii[:taken], counts[:taken]))
+        length, ends = _longest(tree, points, offsets, block[:taken], radii[:taken], counts[:taken])
+        if length > best:
+            best, pair = length, ends
         start += taken
-    return best
+    # The pair measured as every pair is (pdist): the same value to the bit, whichever way it was found.
+    return float(pdist(points[list(pair)])[0])
 
 
-def _longest(tree: cKDTree, offsets: np.ndarray, block: np.ndarray, radii: np.ndarray, counts: np.ndarray) -> float:
-    """The longest pair between each of the ``block`` points and the points in its antipodal ball (0 if none)."""
+def _longest(tree: cKDTree, points: np.ndarray, offsets: np.ndarray, block: np.ndarray, radii: np.ndarray,
+             counts: np.ndarray) -> tuple[float, tuple[int, int]]:
+    """(length, its two points' indices) of the longest pair between each of the ``block`` points and the points
+    in its antipodal ball (0 and no pair if none)."""
     if not counts.sum():
-        return 0.0
+        return 0.0, (0, 0)
     found = tree.query_ball_point(-offsets[block], radii, return_sorted=False)
     ends = np.concatenate([np.asarray(f, dtype=np.int64) for f in found])
     starts = np.repeat(block, counts)
-    return float(np.linalg.norm(offsets[ends] - offsets[starts], axis=1).max())
+    lengths = np.linalg.norm(points[ends] - points[starts], axis=1)
+    k = int(np.argmax(lengths))
+    return float(lengths[k]), (int(starts[k]), int(ends[k]))
 
 
-def _swept(points: np.ndarray) -> float:
-    """A lower bound of the diameter: the farthest point from the farthest point, a few times over."""
-    here, best = 0, 0.0
+def _swept(points: np.ndarray) -> tuple[float, tuple[int, int]]:
+    """A lower bound of the diameter, and its pair: the farthest point from the farthest point, a few times over."""
+    here, best, pair = 0, 0.0, (0, 0)
     for _ in range(_SWEEPS):
         distances = np.linalg.norm(points - points[here], axis=1)
-        here = int(np.argmax(distances))
-        best = max(best, float(distances[here]))
-    return best
+        far = int(np.argmax(distances))
+        if distances[far] > best:
+            best, pair = float(distances[far]), (here, far)
+        here = far
+    return best, pair
