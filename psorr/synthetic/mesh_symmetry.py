@@ -67,11 +67,13 @@ class MeshSymmetry:
             continuous axis, one turn per family of turns that differ by a spin about it.
         axis: (3,) unit direction of the continuous axis, or None.
         axis_point: (3,) a point on every symmetry axis (the surface's area centroid), model units.
+        spherical: a second continuous axis holds too: every turn about ``axis_point`` maps the mesh onto itself.
     """
 
     turns: np.ndarray
     axis: np.ndarray | None
     axis_point: np.ndarray
+    spherical: bool = False
 
     @property
     def symmetries(self) -> np.ndarray:
@@ -173,18 +175,20 @@ def find_symmetries(mesh: trimesh.Trimesh, params: SymmetryParams | None = None)
     points = np.asarray(trimesh.sample.sample_surface(mesh, p.samples, seed=p.seed)[0], np.float64)
     centre, limit = area_centroid(mesh), p.tolerance * model_diameter(mesh)
     surface = _SurfaceDistance(mesh)
-    turns, continuous = [], None
+    turns, continuous, spherical = [], None, False
     for axis in candidate_axes(mesh, p.facet_axes):
         tests = [_about(axis, np.radians(a), centre) for a in p.continuous_test_deg]
-        if continuous is None and all(surface.largest(points, S) <= limit for S in tests):
-            continuous = axis
+        if (continuous is None or not spherical and abs(axis @ continuous) < 0.5) and all(
+                surface.largest(points, S) <= limit for S in tests):
+            # A second axis of revolution, across the first: a ball, which every turn maps onto itself.
+            spherical, continuous = continuous is not None, axis if continuous is None else continuous
             continue
         turns += [S for n in range(2, p.max_order + 1) if surface.largest(points, S := _about(
             axis, 2 * np.pi / n, centre)) <= limit]
     if continuous is not None:
         # Every other turn of a surface of revolution turns its axis end for end, and all such differ by a
         # spin about it: one flip found is all of them, with no group to close.
-        return MeshSymmetry(np.array([np.eye(4), *_flips(continuous, turns)]), continuous, centre)
+        return MeshSymmetry(np.array([np.eye(4), *_flips(continuous, turns)]), continuous, centre, spherical)
     return MeshSymmetry(np.array(_closed_group(turns, limit, lambda S: surface.largest(points, S) <= limit)), None,
                         centre)
 
@@ -195,6 +199,9 @@ def mesh_symmetric_add(points_model, T_est, T_true, symmetry: MeshSymmetry) -> f
     if not isinstance(symmetry, MeshSymmetry):
         raise InvalidInputError(f"symmetry must be a MeshSymmetry (from find_symmetries(mesh)), got a "
                                 f"{type(symmetry).__name__}")
+    if symmetry.spherical:  # some turn about its centre lines the two poses up: only the centres can differ
+        centre = np.append(symmetry.axis_point, 1.0)
+        return float(np.linalg.norm((np.asarray(T_est) @ centre - np.asarray(T_true) @ centre)[:3]))
     return symmetric_add(points_model, T_est, T_true, symmetry)
 
 

@@ -62,6 +62,20 @@ def test_a_cylinder_turns_freely_about_its_axis_and_flips_end_for_end():
     assert symmetry.turns[1][:3, :3] @ symmetry.axis @ symmetry.axis == pytest.approx(-1.0)
 
 
+def test_a_ball_turns_every_way_and_only_its_centre_is_graded():
+    ball = trimesh.creation.icosphere(subdivisions=4, radius=0.03)
+    symmetry = find_symmetries(ball)
+    assert symmetry.spherical and symmetry.axis is not None
+    assert not find_symmetries(cylinder()).spherical
+    rng = np.random.default_rng(7)
+    points = ball.sample(500, seed=1)
+    T_true, T_turned = _pose(rng), _pose(rng)
+    T_turned[:3, 3] = T_true[:3, 3]  # turned every which way about the same centre: the same ball
+    assert mesh_symmetric_add(points, T_turned, T_true, symmetry) == pytest.approx(0.0, abs=1e-6)
+    T_turned[:3, 3] += (0.004, 0.0, 0.0)
+    assert mesh_symmetric_add(points, T_turned, T_true, symmetry) == pytest.approx(0.004, abs=1e-5)
+
+
 def test_a_long_faceted_rod_read_from_a_file_flips_without_closing_a_group(tmp_path, recwarn):
     # Its 64 side facets each give a half turn across the axis; composed, they spin it by every multiple of
     # 5.6 degrees, a group of hundreds whose products overflowed. One flip is all a continuous axis needs.
