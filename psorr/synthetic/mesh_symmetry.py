@@ -176,12 +176,16 @@ def find_symmetries(mesh: trimesh.Trimesh, params: SymmetryParams | None = None)
     centre, limit = area_centroid(mesh), p.tolerance * model_diameter(mesh)
     surface = _SurfaceDistance(mesh)
     turns, continuous, spherical = [], None, False
+
+    def revolves(axis: np.ndarray) -> bool:
+        return all(surface.largest(points, _about(axis, np.radians(a), centre)) <= limit for a in p.continuous_test_deg)
+
     for axis in candidate_axes(mesh, p.facet_axes):
-        tests = [_about(axis, np.radians(a), centre) for a in p.continuous_test_deg]
-        if (continuous is None or not spherical and abs(axis @ continuous) < 0.5) and all(
-                surface.largest(points, S) <= limit for S in tests):
-            # A second axis of revolution, across the first: a ball, which every turn maps onto itself.
-            spherical, continuous = continuous is not None, axis if continuous is None else continuous
+        if continuous is None and revolves(axis):
+            continuous = axis
+            continue
+        if continuous is not None and not spherical and abs(axis @ continuous) < 0.5 and revolves(axis):
+            spherical = True  # a second axis of revolution, across the first: a ball, which every turn keeps
             continue
         turns += [S for n in range(2, p.max_order + 1) if surface.largest(points, S := _about(
             axis, 2 * np.pi / n, centre)) <= limit]
