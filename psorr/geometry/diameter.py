@@ -43,10 +43,10 @@ def diameter(points) -> float:
     while start < len(order):
         block = order[start:start + _QUERIES]
         squared = 2 * widest**2 + 2 * reach[block] ** 2 - best**2  # non-increasing along the block
-        block = block[squared > 0]
-        if not len(block):
+        hopeful = squared > 0
+        if not hopeful.any():
             break  # the farthest point left has an empty ball, and so has every nearer one
-        radii = np.sqrt(squared[squared > 0]) * (1 + _SLACK) + _SLACK * widest
+        block, radii = block[hopeful], np.sqrt(squared[hopeful]) * (1 + _SLACK) + _SLACK * widest
         counts = tree.query_ball_point(-offsets[block], radii, return_length=True)
         taken = max(1, int(np.searchsorted(np.cumsum(counts), _PAIRS, side="right")))
         length, ends = _longest(tree, points, offsets, block[:taken], radii[:taken], counts[:taken])
