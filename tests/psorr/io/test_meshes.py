@@ -24,6 +24,19 @@ def test_read_mesh(tmp_path, suffix):
     np.testing.assert_allclose(mesh.extents, [0.1, 0.2, 0.3], atol=1e-6)
 
 
+@pytest.mark.parametrize("suffix", [".stl", ".ply"])
+def test_read_mesh_merges_vertices_as_trimesh_does(tmp_path, suffix):
+    # An STL repeats a vertex in each face that uses it; the merge must number them as trimesh.load does,
+    # down to the file's face normals, for a model to train the same whichever reads it.
+    ball = trimesh.creation.icosphere(subdivisions=3, radius=0.02).apply_translation([0.01, -0.005, 0.0])
+    path = tmp_path / f"ball{suffix}"
+    ball.export(path)
+    expected, mesh = trimesh.load(path), read_mesh(path)
+    assert len(mesh.vertices) == len(ball.vertices)
+    assert np.array_equal(mesh.vertices, expected.vertices) and np.array_equal(mesh.faces, expected.faces)
+    assert np.array_equal(mesh.face_normals, expected.face_normals)
+
+
 def test_read_mesh_joins_a_scene(tmp_path):
     scene = trimesh.Scene([trimesh.creation.box(),
                            trimesh.creation.box().apply_translation([3, 0, 0])])
