@@ -27,8 +27,7 @@ def is_closed(mesh: trimesh.Trimesh) -> bool:
     winding (a watertight, consistently wound mesh; or one whose bodies touch along edges of four faces)."""
     if len(mesh.faces) == 0:
         return False
-    if mesh.is_watertight:  # trimesh's own checks, cached on the mesh, settle the common case
-        return bool(mesh.is_winding_consistent)
+    # Also what trimesh's is_watertight and is_winding_consistent say of a manifold, which sort rows of edges.
     return bool(np.all(edge_balance(mesh)[1] == 0))
 
 
