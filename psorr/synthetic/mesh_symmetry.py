@@ -137,15 +137,20 @@ def candidate_axes(mesh: trimesh.Trimesh, facet_axes: int) -> list[np.ndarray]:
     return axes
 
 
-def _closed_group(turns: list[np.ndarray], tolerance: float, holds) -> list[np.ndarray]:
-    """The turns (4, 4) closed under composition, identity first; equal within ``tolerance`` (model units).
-    A product joins only if ``holds(S)``: turns kept within the tolerance compose into turns that may not be
-    (a flip 1.8 degrees off an exact one passes on a smooth part; their products spin it by 3.6, 7.2, ...)."""
-    group = [np.eye(4)]
+def _closed_group(turns: list[np.ndarray], points: np.ndarray, tolerance: float, holds) -> list[np.ndarray]:
+    """The turns (4, 4) closed under composition, identity first. Two turns are one when they carry the
+    corners of ``points``' (N, 3) bounding box within ``tolerance`` (their unit) of each other, and so every
+    point: a gear's exact turns and its near ones (a flip found about an axis 0.3 degrees off) are then one
+    turn of 80, not drifting spins that fill the group's 200. A product joins only if ``holds(S)``: turns kept
+    within the tolerance compose into turns that may not be (a flip 1.8 degrees off an exact one passes on
+    a smooth part; their products spin it by 3.6, 7.2, ...)."""
+    low, high = points.min(axis=0), points.max(axis=0)
+    corners = np.array([[(low, high)[(k >> i) & 1][i] for i in range(3)] for k in range(8)])
+    group, carried = [np.eye(4)], [corners]
 
     def known(S):
-        return any(np.abs(S[:3, :3] - G[:3, :3]).max() < 1e-3 and np.abs(S[:3, 3] - G[:3, 3]).max() < tolerance
-                   for G in group)
+        moved = corners @ S[:3, :3].T + S[:3, 3]
+        return bool((np.linalg.norm(np.asarray(carried) - moved, axis=2).max(axis=1) < tolerance).any())
 
     frontier = [S for S in turns if not known(S)]
     while frontier and len(group) < 200:
@@ -153,6 +158,7 @@ def _closed_group(turns: list[np.ndarray], tolerance: float, holds) -> list[np.n
         if known(S) or not holds(S):
             continue
         group.append(S)
+        carried.append(corners @ S[:3, :3].T + S[:3, 3])
         frontier += [S @ G for G in group] + [G @ S for G in group]
     return group
 
@@ -193,8 +199,8 @@ def find_symmetries(mesh: trimesh.Trimesh, params: SymmetryParams | None = None)
         # Every other turn of a surface of revolution turns its axis end for end, and all such differ by a
         # spin about it: one flip found is all of them, with no group to close.
         return MeshSymmetry(np.array([np.eye(4), *_flips(continuous, turns)]), continuous, centre, spherical)
-    return MeshSymmetry(np.array(_closed_group(turns, limit, lambda S: surface.largest(points, S) <= limit)), None,
-                        centre)
+    group = _closed_group(turns, points, limit, lambda S: surface.largest(points, S) <= limit)
+    return MeshSymmetry(np.array(group), None, centre)
 
 
 def mesh_symmetric_add(points_model, T_est, T_true, symmetry: MeshSymmetry) -> float:

@@ -95,8 +95,20 @@ def test_turns_within_the_tolerance_compose_only_into_turns_that_hold():
         angle = np.degrees(np.arccos(np.clip((np.trace(S[:3, :3]) - 1) / 2, -1, 1)))
         return any(abs(angle - a) < 2.0 for a in exact_or_near)
 
-    group = _closed_group([flip, near], 1e-4, holds)
+    group = _closed_group([flip, near], np.array([[-1.0, -1.0, -1.0], [1.0, 1.0, 1.0]]), 1e-4, holds)
     assert len(group) < 10 and all(holds(S) for S in group)
+
+
+def test_a_gear_of_forty_teeth_closes_its_eighty_turns():
+    # Its turns found about near axes compose into spins a fraction of a degree apart; unless those count as
+    # one turn, they filled the group's cap of 200 (seconds to a minute of surface distances).
+    spin = [trimesh.transformations.rotation_matrix(2 * np.pi * k / 40, (0.0, 0.0, 1.0)) for k in range(40)]
+    teeth = [trimesh.creation.box(extents=(0.005, 0.0024, 0.01)).apply_translation((0.0305, 0.0, 0.0))
+             .apply_transform(T) for T in spin]
+    gear = trimesh.boolean.union([trimesh.creation.cylinder(radius=0.029, height=0.01, sections=240), *teeth])
+    symmetry = find_symmetries(gear)
+    assert symmetry.axis is None and len(symmetry.turns) == 80
+    assert any(np.allclose(R, spin[1][:3, :3], atol=0.01) for R in _rotations(symmetry))  # by one tooth
 
 
 def test_a_flanged_bushing_turns_freely_but_does_not_flip():
