@@ -33,7 +33,7 @@ class ContinuationParams:
     """``ring`` metres of outline around a pose are looked at; a ring point within the depth tolerance
     (``check``) of the tangent plane of one of the ``neighbours`` visible model points nearest it, and more
     than ``off_support`` metres above the supporting plane, continues the model's surface. At most
-    ``max_points`` model points are posed."""
+    ``max_points`` model points are tested for what shows and give tangent planes; the silhouette takes every one."""
 
     ring: float = 0.01
     neighbours: int = 16
@@ -54,13 +54,16 @@ def continued_share(view: SceneView, model_points: np.ndarray, model_normals: np
     face of the model (see the module docstring); 0 when the pose shows nothing."""
     stride = max(1, len(model_points) // params.max_points)
     R, t = T_cloud_model[:3, :3], T_cloud_model[:3, 3]
-    pts, nrm = model_points[::stride] @ R.T + t, model_normals[::stride] @ R.T
+    posed = model_points @ R.T + t
+    pts, nrm = posed[::stride], model_normals[::stride] @ R.T
     visible = visible_model_points(view, pts, nrm)
     if len(visible) == 0:
         return 0.0
     # The outline is the whole model's, not only of what shows: a coil that hides the core behind it
     # leaves holes in the visible points' pixels, and the core seen through them would count as going on.
-    every_u, every_v, inside = view.project(pts)
+    # And of every sample: a large part's thinned samples leave gaps in its silhouette wider than the
+    # closing closes (a 300 mm tray's face went on through them over half the ring).
+    every_u, every_v, inside = view.project(posed)
     u, v = every_u[visible], every_v[visible]
     z = float(np.median(pts[visible, 2]))
     reach = max(1, int(round(params.ring * view.focal / z)))
