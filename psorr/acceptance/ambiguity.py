@@ -113,9 +113,10 @@ class NearSymmetryResolver:
         return refine_projective(view, self.renderer, T_cloud_model, self._centre_of(T_cloud_model),
                                  0.5 * self.model.diameter + reach)
 
-    def _costs(self, view: SceneView, poses: np.ndarray, discriminative: bool = True) -> np.ndarray:
+    def _costs(self, view: SceneView, poses: np.ndarray, discriminative: bool = True,
+               sweep: float = 0.0) -> np.ndarray:
         return residual_costs(view, self.renderer, poses, self._centre_of(poses[0]), 0.5 * self.model.diameter,
-                              discriminative=discriminative)
+                              discriminative, sweep)
 
     def _centre_of(self, T: np.ndarray) -> np.ndarray:
         return T[:3, :3] @ self._centre + T[:3, 3]
@@ -137,7 +138,8 @@ class NearSymmetryResolver:
         # bar drop out), and the fine step's winner was then 2-3 degrees off on a hub 1.15 m away
         # (the cell's camera). Over all pixels a turn has one cost, whatever other turns are tried.
         coarse = np.arange(0.0, 360.0, AXIS_COARSE_DEG)
-        best = coarse[int(np.argmin(self._costs(view, self._about_axis(T, coarse), discriminative=False)))]
+        sweep = 0.5 * self.model.diameter * np.radians(AXIS_COARSE_DEG)  # at the rim of the part's sphere
+        best = coarse[int(np.argmin(self._costs(view, self._about_axis(T, coarse), False, sweep)))]
         fine = np.concatenate([[0.0], best + np.arange(-AXIS_COARSE_DEG, AXIS_COARSE_DEG + 1e-9, AXIS_FINE_DEG)])
         poses = self._about_axis(T, fine)
         return poses[int(np.argmin(self._costs(view, poses, discriminative=False)))]
@@ -150,7 +152,7 @@ class NearSymmetryResolver:
     def _best_slide(self, view: SceneView, T: np.ndarray) -> np.ndarray:
         coarse = np.arange(-SLIDE_REACH, SLIDE_REACH + 1e-9, SLIDE_COARSE)
         poses = self._slid(T, np.concatenate([[0.0], coarse]))  # the pose found comes first: costs differ from it
-        costs = self._costs(view, poses)
+        costs = self._costs(view, poses, sweep=SLIDE_COARSE * self.model.diameter)
         best = coarse[int(np.argmin(costs[1:]))]
         fine = np.concatenate([[0.0], best + np.arange(-SLIDE_COARSE, SLIDE_COARSE + 1e-9, SLIDE_FINE)])
         poses = self._slid(T, fine)

@@ -18,6 +18,9 @@ from psorr.verification.scene_view import SceneView
 
 RESIDUAL_CAP = 9.0  # squared sigmas: one pixel that disagrees costs at most a 3-sigma miss
 DISCRIMINATIVE_SIGMAS = 3.0  # pixels where the candidates' renders differ by more than this tell them apart
+# A coarse search's poses, a sweep apart, need no more pixels than this across the sweep to tell which is
+# nearest: a large part 0.6 m away ran its 90 turns over every one of 114,000 pixels (docs/decisions/0076).
+SAMPLES_PER_SWEEP = 4
 
 
 class DepthRenderer:
@@ -69,15 +72,18 @@ def _model_frame_rays(T_cloud_model: np.ndarray, rays: np.ndarray, out: np.ndarr
     return out
 
 
-def pixel_window(view: SceneView, centre: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray]:
+def pixel_window(view: SceneView, centre: np.ndarray, radius: float,
+                 sweep: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """The measured pixels of ``view`` around a sphere (``centre`` (3,), cloud frame; ``radius`` m):
-    flat pixel indices (P,) and their rays (P, 3) with z = 1."""
+    flat pixel indices (P,) and their rays (P, 3) with z = 1. A search whose poses lie ``sweep`` m apart
+    where they differ most takes every k-th pixel in u and v, SAMPLES_PER_SWEEP of them across a sweep."""
     z = max(float(centre[2]) - radius, 1e-3)
     u0 = view.focal * centre[0] / centre[2] + view.cx
     v0 = view.focal * centre[1] / centre[2] + view.cy
     reach = view.focal * radius / z + 2
-    us = np.arange(max(0, int(u0 - reach)), min(view.width, int(u0 + reach) + 1))
-    vs = np.arange(max(0, int(v0 - reach)), min(view.height, int(v0 + reach) + 1))
+    stride = max(1, int(view.focal * sweep / z / SAMPLES_PER_SWEEP))
+    us = np.arange(max(0, int(u0 - reach)), min(view.width, int(u0 + reach) + 1), stride)
+    vs = np.arange(max(0, int(v0 - reach)), min(view.height, int(v0 + reach) + 1), stride)
     U, V = np.meshgrid(us, vs)
     pixels = (V * view.width + U).ravel()
     measured = np.isfinite(view.depth[pixels])
@@ -87,15 +93,16 @@ def pixel_window(view: SceneView, centre: np.ndarray, radius: float) -> tuple[np
 
 
 def residual_costs(view: SceneView, renderer: DepthRenderer, poses: np.ndarray, centre: np.ndarray,
-                   radius: float, discriminative: bool = True) -> np.ndarray:
+                   radius: float, discriminative: bool = True, sweep: float = 0.0) -> np.ndarray:
     """(K,) cost of each pose (K, 4, 4): the summed squared depth residual, in Kinect sigmas and
     capped at ``RESIDUAL_CAP``, of the rendered model (with the supporting plane behind it) against
     the measured depth, over the pixels around the sphere (``centre``, ``radius``).
 
     With ``discriminative``, only pixels where some pose renders differently from the first count:
-    the rest add the same amount to every pose, and their noise would drown a small feature.
+    the rest add the same amount to every pose, and their noise would drown a small feature. ``sweep``: as
+    :func:`pixel_window` takes it.
     """
-    window = _window_costs(view, centre, radius, lambda rays: renderer.depth(poses, rays))
+    window = _window_costs(view, centre, radius, lambda rays: renderer.depth(poses, rays), sweep)
     if window is None:
         return np.zeros(len(poses))
     cost, rendered, sigma = window
@@ -165,12 +172,12 @@ def table_costs(view: SceneView, renderer: DepthRenderer, T_cloud_model: np.ndar
     return cost[:, telling].sum(axis=1), int(telling.sum())
 
 
-def _window_costs(view: SceneView, centre: np.ndarray, radius: float, render):
+def _window_costs(view: SceneView, centre: np.ndarray, radius: float, render, sweep: float = 0.0):
     """Over the measured pixels around the sphere (``centre``, ``radius``): each render's (K, P) squared depth
     residual in Kinect sigmas, capped at RESIDUAL_CAP (a render that misses where the sensor measured costs the
     cap); the (K, P) depths ``render(rays)`` gives for the pixels' rays (P, 3), with the view's supporting plane
     behind them; and the (P,) sigmas. None when no pixel around it was measured."""
-    pixels, rays = pixel_window(view, centre, radius)
+    pixels, rays = pixel_window(view, centre, radius, sweep)
     if len(pixels) == 0:
         return None
     rendered = render(rays)

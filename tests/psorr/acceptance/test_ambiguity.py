@@ -258,3 +258,30 @@ def test_a_hole_through_a_plate_thinner_than_the_bar_tells_its_ends_apart(tmp_pa
     T, _, _ = resolver.resolve(SceneView(scene.cloud), T_true @ end_for_end[0], 0.01)
     hole_found = T[:3, :3] @ [0.02, 0.0, 0.0] + T[:3, 3]
     assert np.linalg.norm(hole_found - hole_true) < 0.005
+
+
+@pytest.mark.parametrize("seed, degrees", [(0, 25.0), (1, -40.0)])
+def test_a_large_plates_turn_is_found_from_its_outline_on_a_thinned_window(tmp_path, seed, degrees):
+    """A 300 x 200 mm plate with a notch turns about its normal almost onto itself, so its turn is searched
+    by render and compare; its coarse step looks at every second or third pixel in u and v, and still finds the turn."""
+    from psorr.verification import depth_compare
+
+    plate = trimesh.creation.box(extents=(0.30, 0.20, 0.012)).apply_translation((0, 0, 0.006))
+    plate = trimesh.boolean.difference([plate, trimesh.creation.box(extents=(0.06, 0.06, 0.05))
+                                        .apply_translation((0.15, 0.10, 0.0))])
+    plate.export(tmp_path / "plate.stl")
+    model = ModelLibrary.from_meshes([tmp_path / "plate.stl"], use_cache=False).model("plate")
+    resolver = NearSymmetryResolver(model)
+    assert resolver.axis is not None
+    scene = workpiece_scene(np.random.default_rng(seed), {"plate": plate}, ["plate"])
+    view, T_true = SceneView(scene.cloud), scene.instances[0].T_camera_model
+    centre = T_true[:3, :3] @ model.points.mean(axis=0) + T_true[:3, 3]
+    radius, sweep = 0.5 * model.diameter, 0.5 * model.diameter * np.radians(4.0)
+    every, _ = depth_compare.pixel_window(view, centre, radius)
+    thinned, _ = depth_compare.pixel_window(view, centre, radius, sweep)
+    assert set(thinned) <= set(every) and len(thinned) < len(every) / 3  # every second pixel or sparser
+    turn = np.eye(4)
+    turn[:3, :3] = trimesh.transformations.rotation_matrix(np.radians(degrees), resolver.axis[1])[:3, :3]
+    turn[:3, 3] = resolver.axis[0] - turn[:3, :3] @ resolver.axis[0]
+    T, _, _ = resolver.resolve(view, T_true @ turn, 0.01)
+    assert _angle_deg(T[:3, :3].T @ T_true[:3, :3]) < 2.0 and np.linalg.norm(T[:3, 3] - T_true[:3, 3]) < 0.005
