@@ -15,6 +15,10 @@ import trimesh
 def edge_balance(mesh: trimesh.Trimesh) -> tuple[np.ndarray, np.ndarray]:
     """(faces bordering each undirected edge, (E,); the faces crossing it one way less the other way, (E,))."""
     directed = np.asarray(mesh.edges, dtype=np.int64)
+    # A face with two corners on one vertex (a sliver that an STL's 32-bit coordinates collapsed, 32 in a
+    # generated pulley) has no area and no way round; its edge from that vertex to itself is no edge, and
+    # its other two cross one edge both ways.
+    directed = directed[directed[:, 0] != directed[:, 1]]
     low, high = directed.min(axis=1), directed.max(axis=1)
     # One integer per undirected edge: a 1-D unique is ten times faster than unique rows on large meshes.
     _, index, count = np.unique(low * len(mesh.vertices) + high, return_inverse=True, return_counts=True)

@@ -31,6 +31,15 @@ def test_bodies_touching_along_an_edge_bound_a_solid():
     assert mesh.volume == pytest.approx(3e-6)
 
 
+def test_faces_collapsed_onto_a_vertex_leave_a_solid_closed():
+    # An STL's 32-bit coordinates can put two corners of a sliver on one vertex: the face (a, a, b) has no
+    # area and no way round, and the file was refused as wound against itself.
+    box = trimesh.creation.box()
+    a, b = box.faces[0][:2]
+    collapsed = trimesh.Trimesh(box.vertices, np.vstack([box.faces, [a, a, b], [b, a, a]]), process=False)
+    assert is_closed(collapsed) and open_edges(collapsed) == 0
+
+
 def test_a_hole_or_a_face_wound_against_its_neighbours_bounds_none():
     holed = trimesh.creation.box()
     holed.update_faces(np.arange(len(holed.faces)) != 0)
