@@ -33,7 +33,13 @@ from psorr.library.symmetries import (
     near_symmetries,
     near_uniform_direction,
 )
-from psorr.verification.depth_compare import DISCRIMINATIVE_SIGMAS, DepthRenderer, residual_costs, twin_costs
+from psorr.verification.depth_compare import (
+    DISCRIMINATIVE_SIGMAS,
+    DepthRenderer,
+    footprint,
+    residual_costs,
+    twin_costs,
+)
 from psorr.verification.point_check import CheckParams, PoseCheck, check_pose
 from psorr.verification.scene_view import SceneView
 
@@ -44,6 +50,7 @@ SLIDE_REACH, SLIDE_COARSE, SLIDE_FINE = 0.16, 0.02, 0.005
 # steps (ICP, after it, pairs points up to 12 mm apart: 0.09 of the U-channel's diameter)
 SLIDE_SEARCH, SLIDE_SEARCH_STEP = 0.4, 0.05
 DENSE_CHECK = CheckParams(max_points=6000)
+FOOTPRINT_SAMPLES = 3000  # model samples a pose is projected by, to find the pixels it can cover
 # A turned pose replaces the original only when its residual is clearly lower; when the features
 # that tell them apart are hidden the residuals tie, and recognition's own choice stands.
 SWITCH_RATIO = 0.9
@@ -85,6 +92,11 @@ class NearSymmetryResolver:
                                      near_uniform_direction(model, self.renderer))
         self.turns, self._exact_but_features, self.axis, self.slide = found
         self._centre = model.points.mean(axis=0)
+        self._area = float(np.sum(np.linalg.norm(np.cross(*(model.vertices[model.faces[:, k]] - model.vertices[
+            model.faces[:, 0]] for k in (1, 2))), axis=1)) / 2)
+        if self.axis is not None:  # how far a turn about the axis carries the furthest sample, per radian
+            off = model.points - self.axis[0]
+            self._axis_reach = float(np.linalg.norm(off - np.outer(off @ self.axis[1], self.axis[1]), axis=1).max())
 
     @property
     def has_broad_twins(self) -> bool:
@@ -116,7 +128,14 @@ class NearSymmetryResolver:
     def _costs(self, view: SceneView, poses: np.ndarray, discriminative: bool = True,
                sweep: float = 0.0) -> np.ndarray:
         return residual_costs(view, self.renderer, poses, self._centre_of(poses[0]), 0.5 * self.model.diameter,
-                              discriminative, sweep)
+                              discriminative, sweep, self._covered(view, poses))
+
+    def _covered(self, view: SceneView, poses: np.ndarray) -> np.ndarray:
+        """The pixels some of ``poses`` can render the model in: a rod turned about its own axis sweeps a
+        strip, not the square around its bounding sphere (70,000 pixels a pose for a 250 mm rod)."""
+        samples = self.model.points[:: max(1, len(self.model.points) // FOOTPRINT_SAMPLES)]
+        spacing = np.sqrt(self._area / len(samples))
+        return footprint(view, np.concatenate([samples @ T[:3, :3].T + T[:3, 3] for T in poses]), spacing)
 
     def _centre_of(self, T: np.ndarray) -> np.ndarray:
         return T[:3, :3] @ self._centre + T[:3, 3]
@@ -138,7 +157,7 @@ class NearSymmetryResolver:
         # bar drop out), and the fine step's winner was then 2-3 degrees off on a hub 1.15 m away
         # (the cell's camera). Over all pixels a turn has one cost, whatever other turns are tried.
         coarse = np.arange(0.0, 360.0, AXIS_COARSE_DEG)
-        sweep = 0.5 * self.model.diameter * np.radians(AXIS_COARSE_DEG)  # at the rim of the part's sphere
+        sweep = self._axis_reach * np.radians(AXIS_COARSE_DEG)  # at the sample furthest from the axis
         best = coarse[int(np.argmin(self._costs(view, self._about_axis(T, coarse), False, sweep)))]
         fine = np.concatenate([[0.0], best + np.arange(-AXIS_COARSE_DEG, AXIS_COARSE_DEG + 1e-9, AXIS_FINE_DEG)])
         poses = self._about_axis(T, fine)

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 import open3d as o3d
+from scipy.ndimage import binary_dilation
 
 from psorr.sensing.kinect_noise import KINECT_V1
 from psorr.verification.scene_view import SceneView
@@ -72,11 +73,24 @@ def _model_frame_rays(T_cloud_model: np.ndarray, rays: np.ndarray, out: np.ndarr
     return out
 
 
-def pixel_window(view: SceneView, centre: np.ndarray, radius: float,
-                 sweep: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+def footprint(view: SceneView, points: np.ndarray, spacing: float) -> np.ndarray:
+    """(height x width,) bool: the pixels a surface sampled by ``points`` (N, 3), cloud frame, every ``spacing``
+    m or closer, can cover: each point's pixel and those within the spacing of it, and a pixel more."""
+    u, v, inside = view.project(points)
+    covered = np.zeros((view.height, view.width), dtype=bool)
+    covered[v[inside], u[inside]] = True
+    if inside.any():
+        reach = int(np.ceil(view.focal * spacing / max(float(points[inside, 2].min()), 1e-3))) + 1
+        covered = binary_dilation(covered, iterations=reach)
+    return covered.ravel()
+
+
+def pixel_window(view: SceneView, centre: np.ndarray, radius: float, sweep: float = 0.0,
+                 within: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The measured pixels of ``view`` around a sphere (``centre`` (3,), cloud frame; ``radius`` m):
     flat pixel indices (P,) and their rays (P, 3) with z = 1. A search whose poses lie ``sweep`` m apart
-    where they differ most takes every k-th pixel in u and v, SAMPLES_PER_SWEEP of them across a sweep."""
+    where they differ most takes every k-th pixel in u and v, SAMPLES_PER_SWEEP of them across a sweep.
+    ``within``: only the pixels it marks (:func:`footprint`; flat, height x width)."""
     z = max(float(centre[2]) - radius, 1e-3)
     u0 = view.focal * centre[0] / centre[2] + view.cx
     v0 = view.focal * centre[1] / centre[2] + view.cy
@@ -87,22 +101,25 @@ def pixel_window(view: SceneView, centre: np.ndarray, radius: float,
     U, V = np.meshgrid(us, vs)
     pixels = (V * view.width + U).ravel()
     measured = np.isfinite(view.depth[pixels])
+    if within is not None:
+        measured &= within[pixels]
     pixels, U, V = pixels[measured], U.ravel()[measured], V.ravel()[measured]
     rays = view.rays(U, V)
     return pixels, rays
 
 
 def residual_costs(view: SceneView, renderer: DepthRenderer, poses: np.ndarray, centre: np.ndarray,
-                   radius: float, discriminative: bool = True, sweep: float = 0.0) -> np.ndarray:
+                   radius: float, discriminative: bool = True, sweep: float = 0.0,
+                   within: np.ndarray | None = None) -> np.ndarray:
     """(K,) cost of each pose (K, 4, 4): the summed squared depth residual, in Kinect sigmas and
     capped at ``RESIDUAL_CAP``, of the rendered model (with the supporting plane behind it) against
     the measured depth, over the pixels around the sphere (``centre``, ``radius``).
 
     With ``discriminative``, only pixels where some pose renders differently from the first count:
-    the rest add the same amount to every pose, and their noise would drown a small feature. ``sweep``: as
-    :func:`pixel_window` takes it.
+    the rest add the same amount to every pose, and their noise would drown a small feature. ``sweep`` and
+    ``within``: as :func:`pixel_window` takes them; pixels that no pose covers add the same to every cost.
     """
-    window = _window_costs(view, centre, radius, lambda rays: renderer.depth(poses, rays), sweep)
+    window = _window_costs(view, centre, radius, lambda rays: renderer.depth(poses, rays), sweep, within)
     if window is None:
         return np.zeros(len(poses))
     cost, rendered, sigma = window
@@ -172,12 +189,13 @@ def table_costs(view: SceneView, renderer: DepthRenderer, T_cloud_model: np.ndar
     return cost[:, telling].sum(axis=1), int(telling.sum())
 
 
-def _window_costs(view: SceneView, centre: np.ndarray, radius: float, render, sweep: float = 0.0):
+def _window_costs(view: SceneView, centre: np.ndarray, radius: float, render, sweep: float = 0.0,
+                  within: np.ndarray | None = None):
     """Over the measured pixels around the sphere (``centre``, ``radius``): each render's (K, P) squared depth
     residual in Kinect sigmas, capped at RESIDUAL_CAP (a render that misses where the sensor measured costs the
     cap); the (K, P) depths ``render(rays)`` gives for the pixels' rays (P, 3), with the view's supporting plane
     behind them; and the (P,) sigmas. None when no pixel around it was measured."""
-    pixels, rays = pixel_window(view, centre, radius, sweep)
+    pixels, rays = pixel_window(view, centre, radius, sweep, within)
     if len(pixels) == 0:
         return None
     rendered = render(rays)

@@ -285,3 +285,22 @@ def test_a_large_plates_turn_is_found_from_its_outline_on_a_thinned_window(tmp_p
     turn[:3, 3] = resolver.axis[0] - turn[:3, :3] @ resolver.axis[0]
     T, _, _ = resolver.resolve(view, T_true @ turn, 0.01)
     assert _angle_deg(T[:3, :3].T @ T_true[:3, :3]) < 2.0 and np.linalg.norm(T[:3, 3] - T_true[:3, 3]) < 0.005
+
+
+def test_a_long_rods_turn_about_its_axis_is_found_from_its_flat(tmp_path):
+    """A 250 mm rod with a flat, started a quarter turn off about its own axis: the turn search renders only
+    the strip the rod can sweep, not the square around its bounding sphere, and finds the flat again."""
+    rod = trimesh.creation.cylinder(radius=0.006, height=0.25, sections=64)
+    rod = trimesh.boolean.difference([rod, trimesh.creation.box(extents=(0.01, 0.02, 0.06))
+                                      .apply_translation((0.0095, 0.0, 0.05))])
+    rod.export(tmp_path / "rod.stl")
+    model = ModelLibrary.from_meshes([tmp_path / "rod.stl"], use_cache=False).model("rod")
+    resolver = NearSymmetryResolver(model)
+    assert resolver.axis is not None and abs(resolver.axis[1][2]) > 0.99
+    scene = workpiece_scene(np.random.default_rng(3), {"rod": rod}, ["rod"])
+    view, T_true = SceneView(scene.cloud), scene.instances[0].T_camera_model
+    turn = np.eye(4)
+    turn[:3, :3] = trimesh.transformations.rotation_matrix(np.radians(90.0), resolver.axis[1])[:3, :3]
+    turn[:3, 3] = resolver.axis[0] - turn[:3, :3] @ resolver.axis[0]
+    T, _, _ = resolver.resolve(view, T_true @ turn, 0.01)
+    assert _angle_deg(T[:3, :3].T @ T_true[:3, :3]) < 3.0
