@@ -220,8 +220,8 @@ def main(argv=None) -> int:
     args.cad = args.cad or DEFAULT_CAD
     paths = {p.stem: p for p in sorted(args.cad.iterdir()) if p.suffix.lower() in MESH_SUFFIXES}
     meshes, short = checked_split(load_meshes(args.cad, args.units), args.cad)
-    print(f"{len(meshes)} parts of at least 25 mm in {args.cad}; left out as shorter: {', '.join(short)}",
-          file=sys.stderr)
+    print(f"{len(meshes)} parts of at least 25 mm in {args.cad}"
+          + (f"; left out as shorter: {', '.join(short)}" if short else "; none shorter"), file=sys.stderr)
     base = "generalization" if gp.is_prusa(meshes) else f"generalization-{args.cad.resolve().name}"
     stem = f"{base}.quick" if args.quick else base
     json_path = args.out / f"{stem}.json"
