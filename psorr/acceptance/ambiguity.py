@@ -92,8 +92,8 @@ class NearSymmetryResolver:
                                      near_uniform_direction(model, self.renderer))
         self.turns, self._exact_but_features, self.axis, self.slide = found
         self._centre = model.points.mean(axis=0)
-        self._area = float(np.sum(np.linalg.norm(np.cross(*(model.vertices[model.faces[:, k]] - model.vertices[
-            model.faces[:, 0]] for k in (1, 2))), axis=1)) / 2)
+        a, b, c = (model.vertices[model.faces[:, k]] for k in range(3))
+        self._area = 0.5 * float(np.linalg.norm(np.cross(b - a, c - a), axis=1).sum())  # m^2, the mesh's
         if self.axis is not None:  # how far a turn about the axis carries the furthest sample, per radian
             off = model.points - self.axis[0]
             self._axis_reach = float(np.linalg.norm(off - np.outer(off @ self.axis[1], self.axis[1]), axis=1).max())
