@@ -86,8 +86,10 @@ def continued_share(view: SceneView, model_points: np.ndarray, model_normals: np
     rv, ru, depth = rv[measured], ru[measured], depth[measured]
     q = np.column_stack([(ru + u0 - view.cx) * depth / view.focal, (rv + v0 - view.cy) * depth / view.focal, depth])
     # The default 16 nearest of the ~1 mm spaced samples span about 4 mm: past an edge face they take in
-    # the faces it joins.
-    _, nearest = cKDTree(pts[visible]).query(q, k=min(params.neighbours, len(visible)))
+    # the faces it joins. Thinned samples keep that span with fewer: 16 of every fifth of a 300 mm tray's
+    # reached its top face's plane from beyond its walls, where other parts stood as high as it.
+    neighbours = max(1, round(params.neighbours / stride))
+    _, nearest = cKDTree(pts[visible]).query(q, k=min(neighbours, len(visible)))
     nearest = visible[nearest.reshape(len(q), -1)]
     off_plane = np.abs(np.einsum("ijk,ijk->ij", q[:, None] - pts[nearest], nrm[nearest]))
     on_face = (off_plane < depth_tolerance(depth, params.check)[:, None]).any(axis=1)
