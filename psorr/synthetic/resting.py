@@ -94,8 +94,8 @@ def stable_rests(mesh: trimesh.Trimesh) -> tuple[Rest, ...]:
             raise InvalidInputError("trimesh found no stable resting pose for the mesh; is it a closed solid?")
         probabilities = np.asarray(probabilities) / np.sum(probabilities)
         order = _canonical_order(np.asarray(transforms), probabilities)
-        shape = mesh if hull is mesh else hull  # a simplified hull's outlines and heights: one vertex set, not 160,000
-        _RESTS[key] = tuple(_rest(transforms[k], probabilities[k], shape) for k in order)
+        # Outlines and heights from what the rests were found on: a simplified hull's few vertices, not 160,000.
+        _RESTS[key] = tuple(_rest(transforms[k], probabilities[k], hull) for k in order)
     return _RESTS[key]
 
 
