@@ -26,6 +26,7 @@ import numpy as np
 from psorr.acceptance.icp import refine_icp
 from psorr.acceptance.projective import refine_projective
 from psorr.geometry.rotations import turn
+from psorr.geometry.surface_moments import surface_area
 from psorr.library.symmetries import (
     exact_but_features,
     exact_symmetries,
@@ -70,6 +71,15 @@ FEATURES_SHOW = (2 * DISCRIMINATIVE_SIGMAS) ** 2
 _FOUND: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
+def _axis_reach(points: np.ndarray, axis: tuple[np.ndarray, np.ndarray] | None) -> float:
+    """How far (m) a turn by one radian about ``axis`` (a point on it, its direction) carries the sample of
+    ``points`` (N, 3) furthest from it; 0 without an axis."""
+    if axis is None:
+        return 0.0
+    off = points - axis[0]
+    return float(np.linalg.norm(off - np.outer(off @ axis[1], axis[1]), axis=1).max())
+
+
 class NearSymmetryResolver:
     """Chooses between a model's near-symmetric poses in a scene by render and compare.
 
@@ -89,14 +99,10 @@ class NearSymmetryResolver:
             # Exact symmetries (the transformer's, the bushing's) need no choosing: their poses are one part.
             turns = turns[~exact_symmetries(self.renderer, model.points, turns)]
             found = _FOUND[model] = (turns, exact_but_features(model.points, turns), axis,
-                                     near_uniform_direction(model, self.renderer))
-        self.turns, self._exact_but_features, self.axis, self.slide = found
+                                     near_uniform_direction(model, self.renderer),
+                                     surface_area(model.vertices, model.faces), _axis_reach(model.points, axis))
+        self.turns, self._exact_but_features, self.axis, self.slide, self._area, self._axis_reach = found
         self._centre = model.points.mean(axis=0)
-        a, b, c = (model.vertices[model.faces[:, k]] for k in range(3))
-        self._area = 0.5 * float(np.linalg.norm(np.cross(b - a, c - a), axis=1).sum())  # m^2, the mesh's
-        if self.axis is not None:  # how far a turn about the axis carries the furthest sample, per radian
-            off = model.points - self.axis[0]
-            self._axis_reach = float(np.linalg.norm(off - np.outer(off @ self.axis[1], self.axis[1]), axis=1).max())
 
     @property
     def has_broad_twins(self) -> bool:

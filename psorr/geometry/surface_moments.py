@@ -17,6 +17,11 @@ def _triangles(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.
     return triangles, areas
 
 
+def surface_area(vertices: np.ndarray, faces: np.ndarray) -> float:
+    """The area of the surface of (V, 3) ``vertices`` and (F, 3) ``faces`` (the vertices' unit squared)."""
+    return float(_triangles(vertices, faces)[1].sum())
+
+
 def area_centroid(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     """(3,) the centroid of the surface of (V, 3) ``vertices`` and (F, 3) ``faces``, weighted by triangle area."""
     return _centroid(*_triangles(vertices, faces))
