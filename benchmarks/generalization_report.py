@@ -117,6 +117,22 @@ def training_lines(data: dict) -> str:
     return "\n".join(lines)
 
 
+def times_table(data: dict) -> str:
+    """Per half and method, the median and slowest ms a scene of each kind: a half's median is a lone part's,
+    as two thirds of its scenes hold one, and a cell's table of several parts takes longer."""
+    kinds = ("single", "clutter", "occluded")
+    rows = []
+    for name, split in data["splits"].items():
+        scene_kinds = [s["kind"] for s in split["scenes"]]
+        for method, result in split["methods"].items():
+            cells = []
+            for kind in kinds:
+                ms = [t for t, k in zip(result["ms"], scene_kinds) if k == kind]
+                cells.append(f"{statistics.median(ms):.0f} / {max(ms):.0f}" if ms else "-")
+            rows.append([name, method, *cells])
+    return _table(["half", "method", *(f"{k}: median / slowest ms" for k in kinds)], rows, "ll" + "r" * len(kinds))
+
+
 def _grouped(data: dict, field: str, values: tuple[str, ...]) -> str:
     present = [v for v in values if any(p[field] == v for s in data["splits"].values() for p in s["parts"])]
     rows = []
@@ -188,6 +204,7 @@ def report(data: dict) -> str:
         "Targets (psorr):", targets_table(data),
         *(["False detections that name the true pose among what the view left open (twin poses, other models' "
            "poses; graded false all the same):", left_open] if left_open else []),
+        "Time a scene, by kind (one core):", times_table(data),
         "Training, one model at a time from its mesh file, no cache (PSORR's and PSG's):", training_lines(data),
         "Recall by size:", sizes_table(data),
         "Recall by class:", classes_table(data), "Per part:", parts_table(data),

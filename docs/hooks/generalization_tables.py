@@ -17,7 +17,8 @@ def _rendered(name: str):
 
 
 TABLES = {"generalization-scenes": _rendered("scenes_lines"), "generalization": _rendered("methods_table"),
-          "generalization-targets": _rendered("targets_table"), "generalization-sizes": _rendered("sizes_table"),
+          "generalization-targets": _rendered("targets_table"),
+          "generalization-times": _rendered("times_table"), "generalization-sizes": _rendered("sizes_table"),
           "generalization-classes": _rendered("classes_table"), "generalization-parts": _rendered("parts_table"),
           "generalization-shapes": _rendered("shapes_table")}
 
