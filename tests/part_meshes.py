@@ -58,6 +58,18 @@ def ellipsoid() -> trimesh.Trimesh:
     return trimesh.creation.icosphere(subdivisions=4, radius=1.0).apply_scale((0.04, 0.025, 0.015))
 
 
+def spoked_knob(slot_width=0.001) -> trimesh.Trimesh:
+    """A knob 8 mm thick: a disc of radius 10 mm with three 10 mm spokes a third of a turn apart, and across its
+    top a slot ``slot_width`` wide and 3 mm deep, which alone breaks the three-fold symmetry."""
+    parts = [trimesh.creation.cylinder(radius=0.01, height=0.008, sections=64)]
+    for k in range(3):
+        spoke = trimesh.creation.box((0.012, 0.004, 0.008)).apply_translation((0.014, 0.0, 0.0))
+        parts.append(spoke.apply_transform(trimesh.transformations.rotation_matrix(2 * np.pi * k / 3, (0, 0, 1))))
+    knob = trimesh.boolean.union(parts, engine="manifold")
+    slot = trimesh.creation.box((slot_width, 0.016, 0.006)).apply_translation((0.0, 0.0, 0.004))
+    return trimesh.boolean.difference([knob, slot], engine="manifold")
+
+
 def trained_library(parts: dict[str, trimesh.Trimesh], folder):
     """A psorr ModelLibrary trained from ``parts`` (name -> mesh), written as STL files into ``folder``
     (a pytest tmp path), without the training cache."""

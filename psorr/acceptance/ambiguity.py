@@ -220,7 +220,10 @@ class NearSymmetryResolver:
             # the poses tie, whatever the turned pose, refitted a millimetre away, renders differently
             # from its twin over a few pixels (decisions 0067 and 0068).
             if evidence[0] < FEATURES_SHOW:
-                ratios[k] = 1.0
+                # The twin is then the pose found, turned in place: it fits the view as that one does, and the
+                # refit, free to slide on the faces they share, drifted (a three-spoked knob's turn by up to
+                # 0.21 of its diameter, tilted off the table).
+                ratios[k], turned[k] = 1.0, T @ S
             elif costs[0] > 0:
                 ratios[k] = costs[1] / costs[0]
         if (~exact).any():
