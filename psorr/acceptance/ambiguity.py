@@ -28,6 +28,7 @@ from psorr.acceptance.projective import refine_projective
 from psorr.geometry.rotations import turn
 from psorr.geometry.surface_moments import surface_area
 from psorr.library.symmetries import (
+    composed_turns,
     exact_but_features,
     exact_symmetries,
     near_continuous_axis,
@@ -80,6 +81,16 @@ def _axis_reach(points: np.ndarray, axis: tuple[np.ndarray, np.ndarray] | None) 
     return float(np.linalg.norm(off - np.outer(off @ axis[1], axis[1]), axis=1).max())
 
 
+def _near_turns(model, renderer: DepthRenderer, axis: np.ndarray | None) -> np.ndarray:
+    """(K, 4, 4) the model's near-symmetric turns that are no exact symmetry: those found about its principal
+    axes, and their products (:func:`composed_turns`). Exact symmetries (the transformer's, the bushing's) need
+    no choosing: their poses are one part."""
+    turns = near_symmetries(model.points, model.diameter, axis=axis)
+    exact = exact_symmetries(renderer, model.points, turns)
+    more = composed_turns(turns, exact, model.points, model.diameter, axis)
+    return np.concatenate([turns[~exact], more[~exact_symmetries(renderer, model.points, more)]])
+
+
 class NearSymmetryResolver:
     """Chooses between a model's near-symmetric poses in a scene by render and compare.
 
@@ -95,9 +106,7 @@ class NearSymmetryResolver:
         found = _FOUND.get(model)
         if found is None:  # about 0.1 s a model, so once per model object however many recognizers use it
             axis = near_continuous_axis(model, self.renderer)
-            turns = near_symmetries(model.points, model.diameter, axis=None if axis is None else axis[1])
-            # Exact symmetries (the transformer's, the bushing's) need no choosing: their poses are one part.
-            turns = turns[~exact_symmetries(self.renderer, model.points, turns)]
+            turns = _near_turns(model, self.renderer, None if axis is None else axis[1])
             found = _FOUND[model] = (turns, exact_but_features(model.points, turns), axis,
                                      near_uniform_direction(model, self.renderer),
                                      surface_area(model.vertices, model.faces), _axis_reach(model.points, axis))

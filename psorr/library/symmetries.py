@@ -5,7 +5,8 @@ tray turned end for end. :func:`near_symmetries` finds the turns about its princ
 the centroid of its samples; half turns, and turns by 360/n degrees, as a knob of three lobes has),
 each settled onto the model by ICP, that move its surface by little on average (an L bracket's legs
 swap about their bisector, a few degrees off its principal axes); exact symmetries qualify too, and
-:func:`exact_symmetries` tells them apart.
+:func:`exact_symmetries` tells them apart. :func:`composed_turns` adds the products of two of those turns
+that lie about no principal axis (a three-spoked knob's half turns about its other spokes).
 :func:`near_continuous_axis` finds an axis about which any turn is a near-symmetry (a flanged hub,
 whose yaw only its bolt holes fix). :func:`near_uniform_direction` finds a direction along which the
 part slides almost onto itself (a U-channel along its length, which only its two end faces fix).
@@ -17,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from psorr.geometry.rotations import rotation_angle, turn
+from psorr.geometry.rotations import rotation_angle, rotation_vector, turn
 from psorr.types import PrimitiveKind
 from psorr.verification.depth_compare import DepthRenderer
 
@@ -84,6 +85,33 @@ def near_symmetries(points: np.ndarray, diameter: float, limit: float = NEAR_MEA
             for S in _cyclic_turns(direction, settled, limit * diameter, drift):
                 add(S)
     return np.array(found).reshape(-1, 4, 4)
+
+
+def composed_turns(turns: np.ndarray, exact: np.ndarray, points: np.ndarray, diameter: float,
+                   axis: np.ndarray | None = None, limit: float = NEAR_MEAN_DISTANCE) -> np.ndarray:
+    """(K, 4, 4) the near-symmetries that products of two of ``turns`` (from :func:`near_symmetries`) make and
+    they lack: a three-spoked knob's half turns about its other two spokes, which are no principal axis (its
+    turns by a third times the half turn found). ``exact`` (len(turns),) marks the exact symmetries, whose
+    products with each other are exact too and are not tried. A product counts when it moves the samples
+    ``points`` (N, 3) by less than ``limit`` x ``diameter`` on average, is not a turn about the near-continuous
+    ``axis`` (3,; searched on its own), and lies at least half the least turn tried from the identity and
+    from every turn kept: products of near turns drift by a few degrees, and two near half turns about axes a
+    little apart make a small spin, which moves any part little."""
+    tree = cKDTree(points)
+    subset = points[:: max(1, len(points) // 3000)]
+    least = np.pi / MAX_ORDER
+    kept, added = list(turns), []
+    for i, j in ((i, j) for i in range(len(turns)) for j in range(len(turns)) if not (exact[i] and exact[j])):
+        S = turns[i] @ turns[j]
+        direction = rotation_vector(S[:3, :3])
+        if np.linalg.norm(direction) < least or any(rotation_angle(S[:3, :3] @ K[:3, :3].T) < least for K in kept):
+            continue
+        if axis is not None and abs(float(direction @ axis)) > PARALLEL_COS * np.linalg.norm(direction):
+            continue
+        if float(tree.query(subset @ S[:3, :3].T + S[:3, 3])[0].mean()) < limit * diameter:
+            kept.append(S)
+            added.append(S)
+    return np.array(added).reshape(-1, 4, 4)
 
 
 def _cyclic_turns(direction: np.ndarray, settled, limit: float, drift: float) -> list[np.ndarray]:

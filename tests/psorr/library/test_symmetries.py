@@ -1,10 +1,12 @@
-"""Near-symmetric turns of parts made inside the test: a three-lobed knob's thirds, a box's half turns."""
+"""Near-symmetric turns of parts made inside the test: a three-lobed knob's thirds, a box's half turns, a
+three-spoked knob's half turns about each spoke."""
 
 import numpy as np
 import trimesh
+from part_meshes import spoked_knob
 
-from psorr.geometry.rotations import rotation_angle
-from psorr.library.symmetries import near_symmetries
+from psorr.geometry.rotations import rotation_angle, rotation_vector
+from psorr.library.symmetries import composed_turns, near_symmetries
 
 
 def _samples(mesh: trimesh.Trimesh, count: int = 6000) -> tuple[np.ndarray, float]:
@@ -46,3 +48,24 @@ def test_a_square_bar_turns_by_quarters_about_its_length():
     points, diameter = _samples(trimesh.creation.box([0.03, 0.03, 0.08]))
     angles = sorted(round(np.degrees(rotation_angle(S[:3, :3]))) for S in near_symmetries(points, diameter))
     assert angles.count(90) == 2  # by 90 and by 270 degrees about its length
+
+
+def test_a_three_spoked_knob_turns_over_about_every_spoke():
+    """Its half turns about the spokes are near-symmetries (a 1 mm slot breaks them); no principal axis need lie
+    along a spoke, so the search about its principal axes may miss some, and their products with the thirds
+    are the others."""
+    points, diameter = _samples(spoked_knob())
+    turns = near_symmetries(points, diameter)
+    more = composed_turns(turns, np.zeros(len(turns), dtype=bool), points, diameter)
+    half_turn_axes = [v / np.linalg.norm(v) for v in (rotation_vector(S[:3, :3]) for S in np.concatenate([turns, more]))
+                      if abs(np.degrees(np.linalg.norm(v)) - 180.0) < 5.0]
+    for k in range(3):
+        spoke = [np.cos(2 * np.pi * k / 3), np.sin(2 * np.pi * k / 3), 0.0]
+        assert sum(abs(float(a @ spoke)) > 0.99 for a in half_turn_axes) == 1
+    assert len(np.concatenate([turns, more])) == 5  # and the two thirds about its axis
+
+
+def test_products_of_exact_symmetries_are_not_tried():
+    points, diameter = _samples(trimesh.creation.box([0.03, 0.03, 0.08]))
+    turns = near_symmetries(points, diameter)
+    assert len(composed_turns(turns, np.ones(len(turns), dtype=bool), points, diameter)) == 0
