@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
+from psorr.geometry.rotations import turn
 from psorr.synthetic.catalog import model_diameter
 from psorr.synthetic.mesh_scenes import MeshScene
 from psorr.synthetic.mesh_symmetry import MeshSymmetry, find_symmetries, match_detections, mesh_symmetric_add
@@ -33,6 +34,9 @@ MIN_LENGTH = 0.025  # m: the issue's parts are those at least 25 mm long at true
 SIZES = (("25-50 mm", 0.05), ("50-100 mm", 0.1), ("over 100 mm", np.inf))
 ADD_SHARE = 0.1  # a detection is correct within a symmetry-aware ADD of 0.1 x the model's diameter
 ADD_SAMPLES = 1000
+# An unfixed turn about an axis is tried every 5 degrees: at the axis reach r <= d / 2 a step moves a point by
+# r x 0.087 < 0.05 d, half the ADD a detection is correct within.
+UNFIXED_STEP_DEG = 5.0
 
 DEV = ("Einsy-hinges", "Extruder-cable-clip", "Heatbed-cable-clip", "Heatbed-cable-clip_for_8mm_sleeve",
        "LCD-knob", "PSU-cover-MK3", "Spool-holder", "extruder-body", "extruder-idler", "extruder-idler-mmu2s",
@@ -154,9 +158,18 @@ def left_open(scene: MeshScene, detections, found: list[bool], correct: list[boo
 
 
 def _left_open_poses(detection) -> list[tuple[str, np.ndarray]]:
-    """The (model, pose) answers a detection reports the view could not rule out."""
+    """The (model, pose) answers a detection reports the view could not rule out: its alternatives, its rivals,
+    and its pose turned about an unfixed axis (in steps of UNFIXED_STEP_DEG)."""
+    turned = []
+    if detection.unfixed_turn is not None:
+        point, direction = detection.unfixed_turn.point, detection.unfixed_turn.direction
+        for degrees in np.arange(UNFIXED_STEP_DEG, 360.0, UNFIXED_STEP_DEG):
+            S = np.eye(4)
+            S[:3, :3] = turn(direction, np.radians(degrees))
+            S[:3, 3] = point - S[:3, :3] @ point
+            turned.append((detection.model, detection.T_cloud_model @ S))
     return ([(detection.model, T) for T in detection.alternatives]
-            + [(r.model, r.T_cloud_model) for r in detection.rivals])
+            + [(r.model, r.T_cloud_model) for r in detection.rivals] + turned)
 
 
 def grade_instances(instances, detections, infos: dict[str, PartInfo]) -> tuple[list[bool], list[bool]]:

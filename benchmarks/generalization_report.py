@@ -186,8 +186,8 @@ def scenes_lines(data: dict) -> str:
 
 def left_open_lines(data: dict, method: str = "psorr") -> str:
     """Per half: how many of ``method``'s false detections left the true pose open among their alternatives
-    or rivals (the near-symmetric poses and other models' poses a view could not rule out:
-    ``Detection.alternatives``, ``Detection.rivals``)."""
+    or rivals or about an unfixed axis (the near-symmetric poses, other models' poses and turns a view could not
+    rule out: ``Detection.alternatives``, ``Detection.rivals``, ``Detection.unfixed_turn``)."""
     lines = []
     for name, split in data["splits"].items():
         result = split["methods"].get(method, {})
@@ -203,7 +203,7 @@ def report(data: dict) -> str:
         scenes_lines(data), methods_table(data),
         "Targets (psorr):", targets_table(data),
         *(["False detections that name the true pose among what the view left open (twin poses, other models' "
-           "poses; graded false all the same):", left_open] if left_open else []),
+           "poses, turns about an unfixed axis; graded false all the same):", left_open] if left_open else []),
         "Time a scene, by kind (one core):", times_table(data),
         "Training, one model at a time from its mesh file, no cache (PSORR's and PSG's):", training_lines(data),
         "Recall by size:", sizes_table(data),

@@ -31,6 +31,7 @@ from psorr.types import (
     PrimitiveKind,
     PrimitiveShapeGraph,
     Rival,
+    UnfixedTurn,
 )
 
 __all__ = [
@@ -64,6 +65,7 @@ __all__ = [
     "SingleCylinderParams",
     "SinglePlaneParams",
     "SupportCropParams",
+    "UnfixedTurn",
     "decompose",
 ]
 __version__ = "0.1.0"

@@ -133,14 +133,17 @@ def _colour_record(detection) -> dict:
 
 
 def _left_open_record(detection) -> dict:
-    """The JSON fields of what the view left open: twin poses, and other models' poses (rivals); none if
-    it settled both."""
+    """The JSON fields of what the view left open: twin poses, other models' poses (rivals), and the axis of a
+    turn nothing in view fixed (model frame); none if it settled all."""
     record = {}
     if detection.alternatives:
         record["alternatives"] = [T.tolist() for T in detection.alternatives]
     if detection.rivals:
         record["rivals"] = [{"model": r.model, "pose": r.T_cloud_model.tolist(), "score": float(r.score)}
                             for r in detection.rivals]
+    if detection.unfixed_turn is not None:
+        axis = detection.unfixed_turn
+        record["unfixed_turn"] = {"point": axis.point.tolist(), "direction": axis.direction.tolist()}
     return record
 
 

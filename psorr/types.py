@@ -14,6 +14,7 @@ from functools import cached_property
 import numpy as np
 
 from psorr.checks.arrays import UNIT_TOLERANCE, frozen_array, integer_labels, not_unit, rigid_pose, unit_share
+from psorr.detection_fields import DetectionColour, Rival, UnfixedTurn
 from psorr.errors import InvalidInputError
 
 
@@ -230,31 +231,6 @@ class PrimitiveShapeGraph:
         return sorted({j for i, j in self.edges if i == index} | {i for i, j in self.edges if j == index})
 
 
-@dataclass(frozen=True)
-class DetectionColour:
-    """The colour of the segment a detection was found in: ``name`` from psorr.segment's palette and
-    ``mean_rgb`` (r, g, b) in [0, 1]."""
-
-    name: str
-    mean_rgb: tuple[float, float, float]
-
-
-@dataclass(frozen=True, eq=False)
-class Rival:
-    """Another library ``model``'s pose ``T_cloud_model`` (4, 4: model metres into the cloud's frame) over a
-    detection's pixels that the view could not rule out: rendered, the two agree with the measured depth
-    alike (a cable clip and its variant for a thicker sleeve differ inside a channel the sensor does not
-    see into). ``score`` in [0, 1], as :attr:`Detection.score`; the detection kept explained more."""
-
-    model: str
-    T_cloud_model: np.ndarray
-    score: float
-
-    def __post_init__(self):
-        object.__setattr__(self, "T_cloud_model", rigid_pose(self.T_cloud_model, "Rival.T_cloud_model"))
-        object.__setattr__(self, "score", unit_share(self.score, "Rival.score"))
-
-
 @dataclass(frozen=True, eq=False)
 class Detection:
     """One recognised workpiece instance.
@@ -273,6 +249,8 @@ class Detection:
         colour: with ``Recognizer(..., use_colour=True)``, the colour of the segment it was found in;
             otherwise None.
         rivals: other models' poses over its pixels that the view could not rule out (:class:`Rival`).
+        unfixed_turn: the turn about the model's near-continuous axis that nothing in view fixed
+            (:class:`UnfixedTurn`), or None.
     """
 
     model: str
@@ -282,6 +260,7 @@ class Detection:
     alternatives: tuple = ()
     colour: DetectionColour | None = None
     rivals: tuple[Rival, ...] = ()
+    unfixed_turn: UnfixedTurn | None = None
 
     def __post_init__(self):
         object.__setattr__(self, "T_cloud_model", rigid_pose(self.T_cloud_model, "Detection.T_cloud_model"))

@@ -70,6 +70,16 @@ def spoked_knob(slot_width=0.001) -> trimesh.Trimesh:
     return trimesh.boolean.difference([knob, slot], engine="manifold")
 
 
+def keyed_pulley() -> trimesh.Trimesh:
+    """A V-groove pulley 60 mm across and 20 mm wide, the same both ways up, with a 10 mm bore whose 3 mm
+    keyway alone fixes its turn about its axis (z)."""
+    profile = np.array([(0, 0), (30, 0), (30, 4), (22, 10), (30, 16), (30, 20), (0, 20)]) * 1e-3
+    pulley = trimesh.creation.revolve(profile, sections=96)
+    bore = trimesh.creation.cylinder(radius=0.005, height=0.05, sections=48)
+    key = trimesh.creation.box((0.003, 0.004, 0.05)).apply_translation((0.0, 0.0055, 0.0))
+    return trimesh.boolean.difference([pulley, bore, key], engine="manifold")
+
+
 def trained_library(parts: dict[str, trimesh.Trimesh], folder):
     """A psorr ModelLibrary trained from ``parts`` (name -> mesh), written as STL files into ``folder``
     (a pytest tmp path), without the training cache."""

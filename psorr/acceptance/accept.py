@@ -182,8 +182,10 @@ class Acceptance:
 
     def _resolved(self, view: SceneView, model: Model, T: np.ndarray) -> Detection:
         """The detection at ``T``, or at the near-symmetric twin the view prefers, with those it left open."""
-        T, check, alternatives = self.resolvers[model.name].resolve(view, T, self.params.icp_distance)
-        return Detection(model.name, T, check.score, check.visible_fraction, alternatives)
+        resolver = self.resolvers[model.name]
+        T, check, alternatives = resolver.resolve(view, T, self.params.icp_distance)
+        return Detection(model.name, T, check.score, check.visible_fraction, alternatives,
+                         unfixed_turn=resolver.unfixed_turn(view, T))
 
     def _settle(self, view: SceneView, fitted: list[Fitted], claims: PixelClaims) -> list[Detection]:
         """The ``fitted`` (best first) that win their pixels in ``claims`` and sit on no larger object, added

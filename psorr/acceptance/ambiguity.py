@@ -28,6 +28,7 @@ from psorr.acceptance.projective import refine_projective
 from psorr.geometry.rotations import turn
 from psorr.geometry.surface_moments import surface_area
 from psorr.library.symmetries import (
+    AXIS_TEST_DEGREES,
     composed_turns,
     exact_but_features,
     exact_symmetries,
@@ -35,6 +36,7 @@ from psorr.library.symmetries import (
     near_symmetries,
     near_uniform_direction,
 )
+from psorr.types import UnfixedTurn
 from psorr.verification.depth_compare import (
     DISCRIMINATIVE_SIGMAS,
     DepthRenderer,
@@ -133,6 +135,18 @@ class NearSymmetryResolver:
             T, alternatives = self._best_half_turn(view, T, icp_distance)
         m = self.model
         return T, check_pose(view, m.points, m.normals, T, DENSE_CHECK), alternatives
+
+    def unfixed_turn(self, view: SceneView, T_cloud_model: np.ndarray) -> UnfixedTurn | None:
+        """The model's near-continuous axis, when the view shows nothing that fixes the turn about it at pose
+        ``T_cloud_model`` (4, 4): turned by each of the axis's test angles, the model renders alike where the
+        sensor measured (the evidence between the renders, as for a twin, stays under FEATURES_SHOW). None
+        when the model has no such axis, or the view fixes the turn."""
+        if self.axis is None:
+            return None
+        poses = np.concatenate([T_cloud_model[None], self._about_axis(T_cloud_model, np.array(AXIS_TEST_DEGREES))])
+        _, evidence = twin_costs(view, self.renderer, poses, [(0, k) for k in range(1, len(poses))],
+                                 self._centre_of(T_cloud_model), 0.5 * self.model.diameter, self._covered(view, poses))
+        return UnfixedTurn(*self.axis) if evidence.max() < FEATURES_SHOW else None
 
     def fit_surface(self, view: SceneView, T_cloud_model: np.ndarray, reach: float) -> np.ndarray:
         """The pose (4, 4) near ``T_cloud_model`` that fits the model's surface to the measured depth

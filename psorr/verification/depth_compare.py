@@ -129,14 +129,14 @@ def residual_costs(view: SceneView, renderer: DepthRenderer, poses: np.ndarray, 
 
 
 def twin_costs(view: SceneView, renderer: DepthRenderer, poses: np.ndarray, twins: list[tuple[int, int]],
-               centre: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray]:
+               centre: np.ndarray, radius: float, within: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(K,) cost of each pose (K, 4, 4), as :func:`residual_costs`, over the pixels around the sphere where
     some pose a of the ``twins`` pairs (a, b) of indices into ``poses`` renders differently from its twin b
     by more than the sensor's sigma, each pixel weighted by how much it tells: the squared gap between the
     renders in sigmas, capped as a residual is, over the cap (1 at the discrimination bar and beyond); and
     (len(twins),) each pair's evidence: those squared gaps summed, what the wrong one of a pair costs above
-    the right one in expectation."""
-    window = _window_costs(view, centre, radius, lambda rays: renderer.depth(poses, rays))
+    the right one in expectation. ``within``: as :func:`pixel_window` takes it (the pixels the poses can cover)."""
+    window = _window_costs(view, centre, radius, lambda rays: renderer.depth(poses, rays), within=within)
     if window is None:
         return np.zeros(len(poses)), np.zeros(len(twins))
     cost, rendered, sigma = window

@@ -13,7 +13,8 @@ from part_meshes import box, plate_with_hole
 from paths import BENCHMARKS
 
 from psorr.synthetic.mesh_scenes import mesh_scene
-from psorr.types import Detection, Rival
+from psorr.geometry.rotations import turn
+from psorr.types import Detection, Rival, UnfixedTurn
 
 sys.path.insert(0, str(BENCHMARKS))
 import generalization_parts as parts  # noqa: E402
@@ -72,6 +73,18 @@ def test_a_false_detection_that_named_the_true_model_as_its_rival_is_counted_as_
     found, correct = parts.grade(scene, detections, infos)
     assert found == [False, False] and correct == [False]
     assert parts.left_open(scene, detections, found, correct, infos) == 1
+
+
+def test_a_false_detection_turned_about_the_axis_its_view_left_open_is_counted_as_left_open(graded):
+    scene, infos = graded
+    block = scene.instances[1].T_camera_model
+    turned = np.eye(4)
+    turned[:3, :3] = turn(np.array([0.0, 0.0, 1.0]), np.radians(40.0))  # about the box's centre, no symmetry
+    detection = Detection("block", block @ turned, 0.9)
+    found, correct = parts.grade(scene, [detection], infos)
+    assert correct == [False] and parts.left_open(scene, [detection], found, correct, infos) == 0
+    detection = Detection("block", block @ turned, 0.9, unfixed_turn=UnfixedTurn(np.zeros(3), [0.0, 0.0, 1.0]))
+    assert parts.left_open(scene, [detection], found, correct, infos) == 1
 
 
 def _results() -> dict:
@@ -150,3 +163,9 @@ def test_the_benchmark_runs_on_a_folder_of_a_users_meshes_in_any_format(tmp_path
     assert list(written["splits"]) == ["all"] and [p["part"] for p in written["splits"]["all"]["parts"]] == [
         "block", "plate"]
     assert (out / "generalization-my_parts.quick.png").stat().st_size > 0
+
+
+def test_times_are_reported_by_scene_kind():
+    table = report.times_table(_results())
+    assert "| dev | psorr | 100 / 100 | 300 / 300 | - |" in table
+    assert "| dev | o3d_global | 1000 / 1000 | 1000 / 1000 | - |" in table

@@ -243,7 +243,7 @@ def test_recognize_with_method_psg_finds_a_single_chassis(tmp_path, method):
 
 def test_the_json_record_of_a_detection_holds_what_the_view_left_open():
     from psorr.cli import _left_open_record
-    from psorr.types import Detection, Rival
+    from psorr.types import Detection, Rival, UnfixedTurn
 
     turned = np.diag([-1.0, -1.0, 1.0, 1.0])
     detection = Detection("clip", np.eye(4), 0.8, alternatives=(turned,), rivals=(Rival("clip_8mm", np.eye(4), 0.7),))
@@ -251,3 +251,6 @@ def test_the_json_record_of_a_detection_holds_what_the_view_left_open():
     assert record["alternatives"] == [turned.tolist()]
     assert record["rivals"] == [{"model": "clip_8mm", "pose": np.eye(4).tolist(), "score": 0.7}]
     assert _left_open_record(Detection("clip", np.eye(4), 0.8)) == {}
+    pulley = Detection("pulley", np.eye(4), 0.8, unfixed_turn=UnfixedTurn([0.0, 0.0, 0.01], [0.0, 0.0, 1.0]))
+    assert json.loads(json.dumps(_left_open_record(pulley))) == {
+        "unfixed_turn": {"point": [0.0, 0.0, 0.01], "direction": [0.0, 0.0, 1.0]}}
