@@ -12,8 +12,8 @@ import pytest
 from part_meshes import box, plate_with_hole
 from paths import BENCHMARKS
 
-from psorr.synthetic.mesh_scenes import mesh_scene
 from psorr.geometry.rotations import turn
+from psorr.synthetic.mesh_scenes import mesh_scene
 from psorr.types import Detection, Rival, UnfixedTurn
 
 sys.path.insert(0, str(BENCHMARKS))
