@@ -1,13 +1,12 @@
 """Recognition: PSORR over primitive pairs, PSG over shape-graph cliques, or the ORR baseline over raw points.
 
-A cloud passes the stages in order, each in its own subpackage (docs/pipeline/index.md): the scene as a depth
-buffer with its supporting plane (verification); parts at rest tried first, which alone may explain all that
-stands (hypotheses.outline, acceptance.by_patch); what stands on the table decomposed into planes, cylinders and
-their shape graph (decomposition); pairs or cliques, clustered by vote and screened by intersecting primitive
-boxes (hypotheses, the paper's section 2.1.4); ICP, the point-level check and pixel claims (acceptance); then
-pairs again among the primitives left unexplained, single faces, long cylinders, the resting poses, a finer
-second look at what still stands unexplained, and the resting poses again over patches an occluder partly hides
-(hypotheses.hidden_rests). ORR (Papazov and Burschka) pairs random oriented points.
+A cloud passes the stages in order, each in its own subpackage (docs/pipeline/index.md): the scene as a depth buffer
+with its supporting plane (verification); parts at rest tried first, which alone may explain all that stands
+(hypotheses.outline, acceptance.by_patch); what stands decomposed into planes, cylinders and their shape graph
+(decomposition); pairs or cliques, clustered by vote and screened by intersecting primitive boxes (hypotheses, the
+paper's section 2.1.4); ICP, the point check and pixel claims (acceptance); then pairs among the primitives left
+unexplained, single faces, long cylinders, the resting poses, a finer second look at what stands unexplained, and the
+resting poses over patches an occluder partly hides (hypotheses.hidden_rests). ORR (Papazov's) pairs random points.
 """
 
 from __future__ import annotations
@@ -88,7 +87,8 @@ class Recognizer:
         self.pairs = PairCandidates(library, p.pairs)
         self.single_plane = SinglePlaneMatcher(library.models, p.single_plane)
         self.single_cylinder = SingleCylinderMatcher(library.models, p.single_cylinder)
-        self.outline = OutlineMatcher(library.models, p.outline, p.acceptance.check) if p.outline.enabled else None
+        self.outline = OutlineMatcher(library.models, p.outline, p.acceptance.check,
+                                      self.acceptance.clear_as_placed) if p.outline.enabled else None
         self.hidden_rests = None if self.outline is None else HiddenRests(self.outline)  # parts partly hidden
         self.psg = clique_matcher(library, self.method, p.psg)  # PSG's; AUTO's of the large models only
         # ORR's own table of dense model pairs, built (or read from the training cache) once per recognizer.

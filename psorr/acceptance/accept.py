@@ -88,17 +88,27 @@ class Acceptance:
         say after the coarse ICP, in one batched check instead of an ICP each
         (docs/decisions/0049-outline-hypotheses.md)."""
         candidates = list(candidates)
-        models = [self.library.models[c.model] for c in candidates]
-        checks = check_poses(view, [m.points for m in models], [m.normals for m in models],
-                             np.array([c.T_cloud_model for c in candidates]).reshape(-1, 4, 4), _COARSE)
+        shares = self.seen_through(view, [c.model for c in candidates], [c.T_cloud_model for c in candidates])
         kept = []
-        for c, m, check in zip(candidates, models, checks):
-            if check.violation_ratio > self.coarse_max_violation:
-                observer().rejected(m.name, c.T_cloud_model,
-                                    f"as placed: {check.violation_ratio:.0%} of it seen through")
+        for c, share in zip(candidates, shares):
+            if share > self.coarse_max_violation:
+                observer().rejected(self.library.models[c.model].name, c.T_cloud_model,
+                                    f"as placed: {share:.0%} of it seen through")
             else:
                 kept.append(c)
         return kept
+
+    def seen_through(self, view: SceneView, models: list[int], poses: list[np.ndarray]) -> np.ndarray:
+        """(P,) the share of each pose (models[k], the library's indices, at poses[k] (4, 4)) the coarse fit's point
+        check sees through, as placed, in one batched check."""
+        found = [self.library.models[m] for m in models]
+        checks = check_poses(view, [m.points for m in found], [m.normals for m in found],
+                             np.array(poses).reshape(-1, 4, 4), _COARSE)
+        return np.array([c.violation_ratio for c in checks])
+
+    def clear_as_placed(self, view: SceneView, models: list[int], poses: list[np.ndarray]) -> np.ndarray:
+        """(P,) bool: is each pose seen through, as placed, by no more than the coarse fit gives up at?"""
+        return self.seen_through(view, models, poses) <= self.coarse_max_violation
 
     def refine(self, view: SceneView, model: Model, T_cloud_model: np.ndarray) -> Detection:
         """A known pose judged as candidates are: coarse ICP, the fine fit, and its near-symmetric twins told apart."""

@@ -80,7 +80,7 @@ class HiddenRests:
                 continue
             patch = grid.patch(label, mine | near, outline.truncation, outline.check)
             if explained is None or not explained(patch.points @ T[:3, :3].T + T[:3, 3]):
-                per_patch.append(self._poses(patch))
+                per_patch.append(self._poses(patch, outline.clear_in(view, T)))
         return outline.chosen(per_patch, table_frame(plane), start)
 
     def _above_every_rest(self, cloud: PointCloud, plane: np.ndarray) -> bool:
@@ -88,7 +88,7 @@ class HiddenRests:
         points = cloud.points[cloud.valid_mask]
         return bool((points @ plane[:3] + plane[3] > self.outline.tallest).any())
 
-    def _poses(self, patch) -> list:
+    def _poses(self, patch, clear=None) -> list:
         """The ordinary search's poses over ``patch``, and those of the shapes wider than it shifted within
         their reach on a grid of the distance fields' truncation (a silhouette that far from its fit still
         reads the costs falling towards it), cheapest first."""
@@ -96,4 +96,4 @@ class HiddenRests:
         reach = patch_reach(patch)
         wide = [shape for shape in outline.shapes if shape.reach > reach + patch.tolerance + p.shift]
         wider = outline.poses(patch, wide, lambda shape: shape.reach, outline.truncation, within_reach=True)
-        return cheapest(outline.patch_poses(patch) + wider, p.max_cost_ratio)
+        return cheapest(outline.patch_poses(patch, clear) + wider, p.max_cost_ratio, clear)

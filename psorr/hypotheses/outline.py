@@ -135,10 +135,13 @@ def _reaching(shifts: np.ndarray, points: np.ndarray, radius: float) -> np.ndarr
     return np.percentile(apart, _EXTREME_SHARE, axis=1) <= radius
 
 
-def cheapest(poses: list, ratio: float) -> list:
-    """``poses`` (cost, ...) costing at most ``ratio`` times the cheapest, cheapest first."""
+def cheapest(poses: list, ratio: float, clear=None) -> list:
+    """``poses`` (cost, ...) costing at most ``ratio`` times the cheapest of those ``clear(poses)`` ((P,) bool;
+    None: all) admits, or of all when it admits none, cheapest first: a pose the sensor sees through as placed
+    (a finned heat sink's over a gear's patch, its fins standing over the gear's face) sets no bar for the rest."""
     poses = sorted(poses, key=lambda pose: pose[0])
-    return [pose for pose in poses if pose[0] <= ratio * poses[0][0]]
+    admitted = [pose for pose, ok in zip(poses, clear(poses) if clear and poses else [True] * len(poses)) if ok]
+    return [pose for pose in poses if pose[0] <= ratio * (admitted or poses)[0][0]]
 
 
 def _subset(points: np.ndarray, count: int) -> np.ndarray:
@@ -152,12 +155,13 @@ class OutlineMatcher:
     _SILHOUETTE_SAMPLES = 150  # of the model, seen from above: enough to tell a silhouette from another
     _COARSE_POINTS, _FINE_POINTS = 120, 300  # of the patch
 
-    def __init__(self, models, params: OutlineParams, check: CheckParams | None = None):
+    def __init__(self, models, params: OutlineParams, check: CheckParams | None = None, clear_as_placed=None):
         from psorr.hypotheses.resting_costs import resting_costs  # numba: imported by the search that needs it
         from psorr.synthetic.resting import stable_rests
 
         self._resting_costs = resting_costs
         self.params, self.check, self.shapes, self.fields = params, check or CheckParams(), [], []
+        self.clear_as_placed = clear_as_placed  # (view, model indices, poses (P, 4, 4)) -> (P,) not seen through
         self.truncation = 2 * self.check.min_tolerance  # holds the point check's tolerance out to 2 m and more
         for index, model in enumerate(models):
             self.fields.append(DistanceField.of_points(model.points, params.cell, self.truncation))
@@ -178,8 +182,15 @@ class OutlineMatcher:
         plane = view.support_plane
         if plane is None or not self.shapes:
             return CandidateSet()
-        per_patch = [self.patch_poses(patch) for patch in self._patches(cloud, plane)]
-        return self.chosen(per_patch, table_frame(plane), start)
+        T, patches = table_frame(plane), self._patches(cloud, plane)
+        return self.chosen([self.patch_poses(patch, self.clear_in(view, T)) for patch in patches], T, start)
+
+    def clear_in(self, view, T_cloud_table: np.ndarray):
+        """Which of a patch's poses (cost, model, T_table_model) ``view`` does not see through as placed, for
+        :func:`cheapest`; None without a test."""
+        if self.clear_as_placed is None:
+            return None
+        return lambda poses: self.clear_as_placed(view, [q[1] for q in poses], [T_cloud_table @ T for *_, T in poses])
 
     def chosen(self, per_patch: list, T_cloud_table: np.ndarray, start: float) -> CandidateSet:
         """The ``max_candidates`` best of ``per_patch``'s poses (each patch's, cheapest first), in the cloud's
@@ -197,13 +208,13 @@ class OutlineMatcher:
         for label in () if grid is None else grid.patches:
             yield grid.patch(label, grid.labels == label, self.truncation, self.check)
 
-    def patch_poses(self, patch: Patch) -> list:
+    def patch_poses(self, patch: Patch, clear=None) -> list:
         """(cost, model, T_table_model) of the best poses over ``patch``, cheapest first: those of the resting
-        shapes about as high as the patch and no narrower, shifted within ``shift``."""
+        shapes about as high as the patch and no narrower, shifted within ``shift`` (``clear``: :func:`cheapest`'s)."""
         p = self.params
         reach = patch_reach(patch)
         fitting = [shape for shape in self.shapes if reach <= shape.reach + patch.tolerance + p.shift]
-        return cheapest(self.poses(patch, fitting, lambda shape: p.shift, 2 * p.cell), p.max_cost_ratio)
+        return cheapest(self.poses(patch, fitting, lambda shape: p.shift, 2 * p.cell), p.max_cost_ratio, clear)
 
     def poses(self, patch: Patch, shapes: list, shift, step: float, within_reach: bool = False) -> list:
         """(cost, model, T_table_model) of the poses over ``patch`` costing at most ``max_cost``: the best

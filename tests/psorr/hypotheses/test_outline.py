@@ -7,7 +7,7 @@ import pytest
 from part_meshes import box, l_bracket, open_lid, plate_with_hole, trained_library
 
 from psorr.errors import InvalidInputError
-from psorr.hypotheses.outline import OutlineMatcher, OutlineParams, table_frame
+from psorr.hypotheses.outline import OutlineMatcher, OutlineParams, cheapest, table_frame
 from psorr.recognize import Recognizer
 from psorr.recognize_params import RecognizeParams
 from psorr.synthetic.mesh_scenes import mesh_scene
@@ -172,3 +172,15 @@ def test_a_part_in_its_least_probable_rest_gets_a_pose_from_every_rest_and_none_
         near = [_mean_offset(model, c.T_cloud_model, scene.instances[0].T_camera_model) < 0.1 * model.diameter
                 for c in candidates if c.model == library.names.index("bracket")]
         assert any(near) is expected, params.rests
+
+
+def test_a_pose_the_sensor_sees_through_sets_no_bar_for_the_others():
+    """A finned heat sink's rest fitted a gear's patch at 0.101 and the gear's own at 0.153: 1.51 times the
+    cheapest, so the ratio cut the gear, and the heat sink's pose was then seen through. The bar is now the
+    cheapest pose the view does not see through as placed; without one, the cheapest of all."""
+    poses = [(0.101, "heat sink"), (0.153, "gear"), (0.30, "clip")]
+    assert [m for _, m in cheapest(poses, 1.5)] == ["heat sink"]
+    clear = lambda ps: [m != "heat sink" for _, m in ps]  # noqa: E731 (the heat sink is seen through)
+    assert [m for _, m in cheapest(poses, 1.5, clear)] == ["heat sink", "gear"]
+    assert [m for _, m in cheapest(poses, 1.5, lambda ps: [False] * len(ps))] == ["heat sink"]
+    assert cheapest([], 1.5, clear) == []
