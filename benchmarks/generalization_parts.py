@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from psorr.geometry.rotations import turn
+from psorr.geometry.rotations import turn_about_line
 from psorr.synthetic.catalog import model_diameter
 from psorr.synthetic.mesh_scenes import MeshScene
 from psorr.synthetic.mesh_symmetry import MeshSymmetry, find_symmetries, match_detections, mesh_symmetric_add
@@ -164,10 +164,8 @@ def _left_open_poses(detection) -> list[tuple[str, np.ndarray]]:
     if detection.unfixed_turn is not None:
         point, direction = detection.unfixed_turn.point, detection.unfixed_turn.direction
         for degrees in np.arange(UNFIXED_STEP_DEG, 360.0, UNFIXED_STEP_DEG):
-            S = np.eye(4)
-            S[:3, :3] = turn(direction, np.radians(degrees))
-            S[:3, 3] = point - S[:3, :3] @ point
-            turned.append((detection.model, detection.T_cloud_model @ S))
+            turned.append((detection.model, detection.T_cloud_model @ turn_about_line(direction, np.radians(degrees),
+                                                                                       point)))
     return ([(detection.model, T) for T in detection.alternatives]
             + [(r.model, r.T_cloud_model) for r in detection.rivals] + turned)
 

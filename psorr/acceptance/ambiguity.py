@@ -25,7 +25,7 @@ import numpy as np
 
 from psorr.acceptance.icp import refine_icp
 from psorr.acceptance.projective import refine_projective
-from psorr.geometry.rotations import turn
+from psorr.geometry.rotations import turn_about_line
 from psorr.geometry.surface_moments import surface_area
 from psorr.library.symmetries import (
     AXIS_TEST_DEGREES,
@@ -173,10 +173,7 @@ class NearSymmetryResolver:
         point, axis = self.axis
         poses = np.repeat(T[None], len(degrees), axis=0)
         for k, a in enumerate(degrees):
-            S = np.eye(4)
-            S[:3, :3] = turn(axis, np.radians(a))
-            S[:3, 3] = point - S[:3, :3] @ point
-            poses[k] = T @ S
+            poses[k] = T @ turn_about_line(axis, np.radians(a), point)
         return poses
 
     def _best_turn_about_axis(self, view: SceneView, T: np.ndarray) -> np.ndarray:

@@ -25,6 +25,14 @@ def turn(axis: np.ndarray, angle: float) -> np.ndarray:
     return np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K
 
 
+def turn_about_line(axis: np.ndarray, angle: float, point: np.ndarray) -> np.ndarray:
+    """(4, 4) rotation by ``angle`` radians about the line through ``point`` (3,) along the unit ``axis`` (3,)."""
+    S = np.eye(4)
+    S[:3, :3] = turn(axis, angle)
+    S[:3, 3] = point - S[:3, :3] @ point
+    return S
+
+
 def from_rotation_vector(rotvec: np.ndarray) -> np.ndarray:
     """(3, 3) rotation of the rotation vector ``rotvec`` (3,): axis times angle in radians."""
     angle = float(np.linalg.norm(rotvec))

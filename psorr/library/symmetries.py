@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from psorr.geometry.rotations import rotation_angle, rotation_vector, turn
+from psorr.geometry.rotations import rotation_angle, rotation_vector, turn, turn_about_line
 from psorr.types import PrimitiveKind
 from psorr.verification.depth_compare import DepthRenderer
 
@@ -61,9 +61,7 @@ def near_symmetries(points: np.ndarray, diameter: float, limit: float = NEAR_MEA
     found = []
 
     def settled(direction: np.ndarray, angle: float) -> tuple[np.ndarray, float]:
-        S = np.eye(4)
-        S[:3, :3] = turn(direction, angle)
-        S[:3, 3] = centroid - S[:3, :3] @ centroid
+        S = turn_about_line(direction, angle, centroid)
         # A part that is not quite symmetric (an L bracket with legs of 60 and 50 mm) has its
         # principal axes a few degrees off the turn that swaps its halves; settle onto that turn.
         S, distance = _settled(S, subset, tree)

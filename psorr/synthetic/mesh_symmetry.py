@@ -26,7 +26,7 @@ import trimesh
 
 from psorr.errors import InvalidInputError
 from psorr.geometry import surface_moments
-from psorr.geometry.rotations import turn
+from psorr.geometry.rotations import turn_about_line
 from psorr.synthetic.catalog import CONTINUOUS_STEP_DEG, model_diameter, symmetric_add
 
 
@@ -81,7 +81,7 @@ class MeshSymmetry:
         continuous axis every CONTINUOUS_STEP_DEG degrees when there is one."""
         if self.axis is None:
             return self.turns
-        spins = np.array([_about(self.axis, np.radians(a), self.axis_point)
+        spins = np.array([turn_about_line(self.axis, np.radians(a), self.axis_point)
                           for a in np.arange(0.0, 360.0, CONTINUOUS_STEP_DEG)])
         return np.einsum("kij,mjl->kmil", self.turns, spins).reshape(-1, 4, 4)
 
@@ -90,14 +90,6 @@ class MeshSymmetry:
         """Always None: the spins about a continuous axis are already among ``symmetries``, so that
         :func:`~psorr.synthetic.catalog.symmetric_add` takes a MeshSymmetry as it takes a catalog entry."""
         return None
-
-
-def _about(axis: np.ndarray, angle: float, point: np.ndarray) -> np.ndarray:
-    """(4, 4) rotation by ``angle`` radians about the line through ``point`` along the unit ``axis``."""
-    S = np.eye(4)
-    S[:3, :3] = turn(axis, angle)
-    S[:3, 3] = point - S[:3, :3] @ point
-    return S
 
 
 class _SurfaceDistance:
@@ -184,7 +176,8 @@ def find_symmetries(mesh: trimesh.Trimesh, params: SymmetryParams | None = None)
     turns, continuous, spherical = [], None, False
 
     def revolves(axis: np.ndarray) -> bool:
-        return all(surface.largest(points, _about(axis, np.radians(a), centre)) <= limit for a in p.continuous_test_deg)
+        return all(surface.largest(points, turn_about_line(axis, np.radians(a), centre)) <= limit
+                   for a in p.continuous_test_deg)
 
     for axis in candidate_axes(mesh, p.facet_axes):
         if continuous is None and revolves(axis):
@@ -193,7 +186,7 @@ def find_symmetries(mesh: trimesh.Trimesh, params: SymmetryParams | None = None)
         if continuous is not None and not spherical and abs(axis @ continuous) < 0.5 and revolves(axis):
             spherical = True  # a second axis of revolution, across the first: a ball, which every turn keeps
             continue
-        turns += [S for n in range(2, p.max_order + 1) if surface.largest(points, S := _about(
+        turns += [S for n in range(2, p.max_order + 1) if surface.largest(points, S := turn_about_line(
             axis, 2 * np.pi / n, centre)) <= limit]
     if continuous is not None:
         # Every other turn of a surface of revolution turns its axis end for end, and all such differ by a

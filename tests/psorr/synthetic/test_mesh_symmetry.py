@@ -9,12 +9,11 @@ import trimesh
 from part_meshes import box, cylinder, ellipsoid, flanged_bushing, l_bracket, plate_with_hole
 
 from psorr.errors import InvalidInputError
-from psorr.geometry.rotations import turn
+from psorr.geometry.rotations import turn, turn_about_line
 from psorr.synthetic.catalog import load_catalog, model_diameter, symmetric_add
 from psorr.synthetic.mesh_symmetry import (
     MeshSymmetry,
     SymmetryParams,
-    _about,
     _closed_group,
     find_symmetries,
     mesh_symmetric_add,
@@ -88,7 +87,7 @@ def test_a_long_faceted_rod_read_from_a_file_flips_without_closing_a_group(tmp_p
 def test_turns_within_the_tolerance_compose_only_into_turns_that_hold():
     # An exact half turn about y and one 1.8 degrees off it (both within a smooth part's tolerance) compose
     # into spins about x by 3.6 degrees and its multiples; only those that map the part onto itself join.
-    flip, near = (_about(axis, np.pi, np.zeros(3)) for axis in ((0.0, 1.0, 0.0), (0.0, 0.9995, 0.0314)))
+    flip, near = (turn_about_line(axis, np.pi, np.zeros(3)) for axis in ((0.0, 1.0, 0.0), (0.0, 0.9995, 0.0314)))
     exact_or_near = {0.0, 180.0}
 
     def holds(S):
