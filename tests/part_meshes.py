@@ -88,3 +88,10 @@ def trained_library(parts: dict[str, trimesh.Trimesh], folder):
     for name, mesh in parts.items():
         mesh.export(folder / f"{name}.stl")
     return ModelLibrary.from_meshes(sorted(folder.glob("*.stl")), use_cache=False)
+
+
+def drilled_cube(side=0.02, hole_radius=0.003) -> trimesh.Trimesh:
+    """A cube with a hole through it along z: its principal moments are all but equal, so its principal axes are
+    any three; only the hole tells its turns that take z to x or y from the exact ones."""
+    hole = trimesh.creation.cylinder(radius=hole_radius, height=2 * side, sections=32)
+    return trimesh.boolean.difference([trimesh.creation.box((side, side, side)), hole], engine="manifold")

@@ -30,13 +30,14 @@ from psorr.geometry.surface_moments import surface_area
 from psorr.library.symmetries import (
     AXIS_TEST_DEGREES,
     composed_turns,
+    distinct_up_to_exact,
     exact_but_features,
     exact_symmetries,
     near_continuous_axis,
     near_symmetries,
     near_uniform_direction,
 )
-from psorr.types import UnfixedTurn
+from psorr.types import PrimitiveKind, UnfixedTurn
 from psorr.verification.depth_compare import (
     DISCRIMINATIVE_SIGMAS,
     DepthRenderer,
@@ -87,10 +88,12 @@ def _near_turns(model, renderer: DepthRenderer, axis: np.ndarray | None) -> np.n
     """(K, 4, 4) the model's near-symmetric turns that are no exact symmetry: those found about its principal
     axes, and their products (:func:`composed_turns`). Exact symmetries (the transformer's, the bushing's) need
     no choosing: their poses are one part."""
-    turns = near_symmetries(model.points, model.diameter, axis=axis)
+    directions = [p.normal if p.kind is PrimitiveKind.PLANE else p.axis for p in model.graph.primitives]
+    turns = near_symmetries(model.points, model.diameter, axis=axis, directions=np.reshape(directions, (-1, 3)))
     exact = exact_symmetries(renderer, model.points, turns)
     more = composed_turns(turns, exact, model.points, model.diameter, axis)
-    return np.concatenate([turns[~exact], more[~exact_symmetries(renderer, model.points, more)]])
+    near = np.concatenate([turns[~exact], more[~exact_symmetries(renderer, model.points, more)]])
+    return distinct_up_to_exact(renderer, model.points, near)
 
 
 class NearSymmetryResolver:

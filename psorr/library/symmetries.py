@@ -38,10 +38,11 @@ FEATURE_MOVE, FEATURE_SHARE = 0.002, 0.1
 # psorr.synthetic.mesh_symmetry tries them when it grades poses (a three-lobed knob turned by 120 degrees).
 MAX_ORDER = 8
 PARALLEL_COS = np.cos(np.radians(10.0))  # a principal axis within 10 degrees of a near-continuous axis is it
+_ACROSS_SIN = np.sin(np.radians(10.0))  # ... and a direction within 10 degrees of square to an axis is across it
 
 
 def near_symmetries(points: np.ndarray, diameter: float, limit: float = NEAR_MEAN_DISTANCE,
-                    axis: np.ndarray | None = None) -> np.ndarray:
+                    axis: np.ndarray | None = None, directions: np.ndarray | None = None) -> np.ndarray:
     """(K, 4, 4) model-frame near-symmetries S about principal axes through the samples' centroid, each
     settled by ICP of S(points) onto points, whose mean nearest-sample distance is below ``limit`` x
     ``diameter``: a half turn about each axis, and about an axis the part is round across (in its second
@@ -49,10 +50,15 @@ def near_symmetries(points: np.ndarray, diameter: float, limit: float = NEAR_MEA
     turn k / n settles near its own angle. One per distinct turn; K may be 0. No turns of order n > 2 are
     tried about ``axis`` (a near-continuous axis, whose every angle is searched on its own).
 
+    Where two principal moments are round (a square bar's section, a cube's all three), the principal axes
+    in their plane are any pair; there the ``directions`` that lie in it (the normals of the model's faces,
+    its cylinders' axes: a drilled cube's turns lie about them) are tried as well.
+
     Args:
         points: (N, 3) even surface samples of the model, metres.
         diameter: the model's diameter, metres.
         axis: (3,) a direction, model frame, about which to try half turns only; None for none.
+        directions: (D, 3) unit directions, model frame, to try where the principal axes are undetermined.
     """
     centroid = points.mean(axis=0)
     moments, axes = np.linalg.eigh(np.cov((points - centroid).T))
@@ -71,12 +77,14 @@ def near_symmetries(points: np.ndarray, diameter: float, limit: float = NEAR_MEA
         if not any(np.linalg.norm(S[:3, :3] - F[:3, :3]) < 0.1 for F in found):
             found.append(S)
 
-    for i, direction in enumerate(axes.T):
+    covariance = np.cov((points - centroid).T)
+    more = _undetermined(directions, moments, axes, limit * diameter)
+    for i, direction in enumerate([*axes.T, *more]):
         S, mean = settled(direction, np.pi)
         if mean < limit * diameter:
             add(S)
         about_axis = axis is not None and abs(float(direction @ axis)) > PARALLEL_COS
-        across = np.delete(moments, i)
+        across = np.delete(moments, i) if i < 3 else _moments_across(covariance, direction)
         if not about_axis and _round_in_plane(across, limit * diameter):
             # A turn off by delta moves samples at the rms radius r by r delta: at most the limit.
             drift = limit * diameter / np.sqrt(across.sum())
@@ -128,6 +136,30 @@ def _cyclic_turns(direction: np.ndarray, settled, limit: float, drift: float) ->
         else:
             return group
     return []
+
+
+def _moments_across(covariance: np.ndarray, direction: np.ndarray) -> np.ndarray:
+    """(2,) the principal moments (m^2) of ``covariance`` (3, 3) in the plane across the unit ``direction``."""
+    basis = np.linalg.svd(np.eye(3) - np.outer(direction, direction))[0][:, :2]
+    return np.linalg.eigvalsh(basis.T @ covariance @ basis)
+
+
+def _undetermined(directions: np.ndarray | None, moments: np.ndarray, axes: np.ndarray, move: float) -> list:
+    """The unit ``directions`` (D, 3) that lie where the principal ``axes`` (3, 3, columns) are undetermined by
+    their ``moments`` (3,): in the plane of two round moments (across the third axis), or anywhere when all three
+    are round; one of each within PARALLEL_COS of another or of a principal axis."""
+    if directions is None or not len(directions):
+        return []
+    round_across = [i for i in range(3) if _round_in_plane(np.delete(moments, i), move)]
+    if not round_across:
+        return []
+    kept = [axes[:, i] for i in range(3)]
+    for d in np.asarray(directions, dtype=float):
+        d = d / np.linalg.norm(d)
+        in_plane = len(round_across) == 3 or any(abs(float(d @ axes[:, i])) < _ACROSS_SIN for i in round_across)
+        if in_plane and all(abs(float(d @ k)) < PARALLEL_COS for k in kept):
+            kept.append(d)
+    return kept[3:]
 
 
 def _round_in_plane(moments: np.ndarray, move: float) -> bool:
@@ -211,6 +243,21 @@ def exact_symmetries(renderer: DepthRenderer, points: np.ndarray, turns: np.ndar
     subset = points[:: max(1, len(points) // 1500)]
     return np.array([renderer.distance(subset @ S[:3, :3].T + S[:3, 3]).max() <= FACET_DISTANCE for S in turns],
                     dtype=bool)
+
+
+def distinct_up_to_exact(renderer: DepthRenderer, points: np.ndarray, turns: np.ndarray) -> np.ndarray:
+    """(K', 4, 4) one of each set of ``turns`` (K, 4, 4) that give the same poses: S and S' where S^-1 S' is an
+    exact symmetry (:func:`exact_symmetries`), so that a pose turned by either looks the same (a drilled cube's
+    16 near-symmetric turns are two poses of its hole, across the view and along it). The first of each is kept."""
+    tree = cKDTree(points)
+    subset = points[:: max(1, len(points) // 3000)]
+    kept: list[np.ndarray] = []
+    for S in turns:
+        # Settled first: turns settled one by one drift by a degree or so, and their quotient with them.
+        between = np.array([_settled(np.linalg.inv(K) @ S, subset, tree)[0] for K in kept]).reshape(-1, 4, 4)
+        if not exact_symmetries(renderer, points, between).any():
+            kept.append(S)
+    return np.array(kept).reshape(-1, 4, 4)
 
 
 def exact_but_features(points: np.ndarray, turns: np.ndarray) -> np.ndarray:
