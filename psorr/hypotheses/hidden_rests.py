@@ -21,8 +21,8 @@ import numpy as np
 from scipy import ndimage
 
 from psorr.hypotheses.candidates import CandidateSet
-from psorr.hypotheses.outline import OutlineMatcher, cheapest, patch_reach
-from psorr.hypotheses.standing_patches import StandingGrid, standing_grid, table_frame
+from psorr.hypotheses.outline import OutlineMatcher, cheapest
+from psorr.hypotheses.standing_patches import StandingGrid, patch_reach, standing_grid, table_frame
 from psorr.types import PointCloud
 from psorr.verification.point_check import depth_tolerance
 

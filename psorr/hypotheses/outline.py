@@ -23,7 +23,7 @@ from psorr.checks import params as check
 from psorr.geometry.distance_field import DistanceField
 from psorr.hypotheses.candidates import Candidate, CandidateSet
 from psorr.hypotheses.same_surface import SameSurface
-from psorr.hypotheses.standing_patches import Patch, standing_grid, table_frame
+from psorr.hypotheses.standing_patches import EXTREME_SHARE, Patch, patch_reach, reaching, standing_grid, table_frame
 from psorr.types import PointCloud
 from psorr.verification.point_check import CheckParams
 
@@ -81,12 +81,6 @@ class OutlineParams:
             check.whole(self, "hidden_border", note=" (None: no search of partly hidden parts)")
 
 
-# Percent: a patch's top and reach are those of all but its 2% most extreme points. The table's noise lifts
-# specks of it above the standing bar, and the closing joins those beside a part to its patch: an extruder
-# body's patch reached 70 mm from its centre, 16 mm past the part, by specks of table (its 99th percentile, 51).
-_EXTREME_SHARE = 98
-
-
 @dataclass(frozen=True, eq=False)
 class RestingShape:
     """A model resting one way. T_table_model (4, 4) puts the model's silhouette centroid at x = y = 0
@@ -120,19 +114,6 @@ def _placed(angle: float, shift: np.ndarray) -> np.ndarray:
 def _square(centre: np.ndarray, span: np.ndarray) -> np.ndarray:
     """(S, 3) the points ``centre`` (3,) + (a, b, 0) for every a and b in ``span``: shifts on the table."""
     return centre + np.stack(np.meshgrid(span, span, [0.0], indexing="ij"), -1).reshape(-1, 3)
-
-
-def patch_reach(patch: Patch) -> float:
-    """How far ``patch`` reaches from its centre on the table: all but its most extreme points."""
-    centre = patch.points[:, :2].mean(axis=0)
-    return float(np.percentile(np.linalg.norm(patch.points[:, :2] - centre, axis=1), _EXTREME_SHARE))
-
-
-def _reaching(shifts: np.ndarray, points: np.ndarray, radius: float) -> np.ndarray:
-    """(S,) whether all but the most extreme of ``points`` (N, 3) lie within ``radius`` of each of ``shifts``
-    (S, 3) on the table."""
-    apart = np.linalg.norm(points[None, :, :2] - shifts[:, None, :2], axis=2)
-    return np.percentile(apart, _EXTREME_SHARE, axis=1) <= radius
 
 
 def cheapest(poses: list, ratio: float, clear=None) -> list:
@@ -174,6 +155,7 @@ class OutlineMatcher:
                 self.shapes.append(RestingShape(index, T, np.linalg.inv(T), _subset(seen, self._SILHOUETTE_SAMPLES),
                                                 rest.height, float(np.linalg.norm(seen, axis=1).max())))
         self.tallest = max((shape.height for shape in self.shapes), default=0.0) + params.height_slack
+        self.widest = max((shape.reach for shape in self.shapes), default=0.0)
         self.same = SameSurface(models)
 
     def candidates(self, cloud: PointCloud, view) -> CandidateSet:
@@ -203,10 +185,16 @@ class OutlineMatcher:
                             sum(len(p) for p in per_patch), (time.perf_counter() - start) * 1e3, len(per_patch))
 
     def _patches(self, cloud: PointCloud, plane: np.ndarray):
-        """Each connected patch of points standing on the table (see OutlineParams)."""
-        grid = standing_grid(cloud, plane, self.params, self.tallest, self.check)
+        """Each connected patch of points standing on the table (see OutlineParams); one wider than any resting
+        shape reaches is no one part, and goes on as the pieces the closing of its cells joined, if it has them."""
+        grid, p = standing_grid(cloud, plane, self.params, self.tallest, self.check), self.params
         for label in () if grid is None else grid.patches:
-            yield grid.patch(label, grid.labels == label, self.truncation, self.check)
+            whole = grid.patch(label, grid.labels == label, self.truncation, self.check)
+            wide = patch_reach(whole) > self.widest + whole.tolerance + p.shift
+            pieces = grid.cores(label, p.min_area) if wide else []
+            yield from (grid.patch(label, free, self.truncation, self.check, members) for members, free in pieces)
+            if not pieces:
+                yield whole
 
     def patch_poses(self, patch: Patch, clear=None) -> list:
         """(cost, model, T_table_model) of the best poses over ``patch``, cheapest first: those of the resting
@@ -223,7 +211,7 @@ class OutlineMatcher:
         ``within_reach``: only the shifts that leave the patch's points within the shape's reach of its centre
         (its silhouette covers the patch), give or take the patch's tolerance and a step."""
         p = self.params
-        top = np.percentile(patch.points[:, 2], _EXTREME_SHARE)
+        top = np.percentile(patch.points[:, 2], EXTREME_SHARE)
         centre = np.append(patch.points[:, :2].mean(axis=0), 0.0)
         angles = np.radians(np.arange(0.0, 360.0, p.angle_step_deg))
         points = _subset(patch.points, self._COARSE_POINTS)
@@ -233,7 +221,7 @@ class OutlineMatcher:
                 continue
             shifts = _square(centre, np.arange(-shift(shape), shift(shape) + step / 2, step))
             if within_reach:
-                shifts = shifts[_reaching(shifts, points, shape.reach + patch.tolerance + step)]
+                shifts = shifts[reaching(shifts, points, shape.reach + patch.tolerance + step)]
             if not len(shifts):
                 continue
             coarse = self._costs(patch, shape, angles, shifts, points)

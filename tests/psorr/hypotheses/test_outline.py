@@ -184,3 +184,30 @@ def test_a_pose_the_sensor_sees_through_sets_no_bar_for_the_others():
     assert [m for _, m in cheapest(poses, 1.5, clear)] == ["heat sink", "gear"]
     assert [m for _, m in cheapest(poses, 1.5, lambda ps: [False] * len(ps))] == ["heat sink"]
     assert cheapest([], 1.5, clear) == []
+
+
+def test_two_plates_the_closing_joins_are_searched_as_two_patches(library):
+    """A second plate 3 mm beside the first: the closing of the standing cells joins them into one patch that no
+    model reaches across, so the patch goes on as the two pieces its cells make without the closing, and the
+    first plate is posed over its own."""
+    from psorr.types import PointCloud
+
+    scene = mesh_scene(np.random.default_rng(0), PARTS, "single", names=["plate"])
+    view = SceneView(scene.cloud)
+    T_cloud_table = table_frame(view.support_plane)
+    T_table_cloud = np.linalg.inv(T_cloud_table)
+    plate = scene.cloud.points[scene.cloud.labels.reshape(-1) == 1]
+    local = plate @ T_table_cloud[:3, :3].T + T_table_cloud[:3, 3]
+    across = np.linalg.eigh(np.cov(local[:, :2].T))[1][:, 0]  # the plate's short side, on the table
+    beside = local + np.append(across * (np.ptp(local[:, :2] @ across) + 0.003), 0.0)
+    points = np.vstack([scene.cloud.points[scene.cloud.valid_mask],
+                        beside @ T_cloud_table[:3, :3].T + T_cloud_table[:3, 3]])
+    cloud = PointCloud(points)
+    matcher = OutlineMatcher(library.models, OutlineParams(enabled=True))
+    patches = list(matcher._patches(cloud, SceneView(cloud).support_plane))
+    assert len(patches) == 2
+    found = matcher.candidates(cloud, SceneView(cloud))
+    model = library.model("plate")
+    offsets = [_mean_offset(model, c.T_cloud_model, scene.instances[0].T_camera_model)
+               for c in found.candidates if c.model == library.names.index("plate")]
+    assert offsets and min(offsets) < 0.1 * model.diameter
