@@ -86,8 +86,9 @@ def _axis_reach(points: np.ndarray, axis: tuple[np.ndarray, np.ndarray] | None) 
 
 def _near_turns(model, renderer: DepthRenderer, axis: np.ndarray | None) -> np.ndarray:
     """(K, 4, 4) the model's near-symmetric turns that are no exact symmetry: those found about its principal
-    axes, and their products (:func:`composed_turns`). Exact symmetries (the transformer's, the bushing's) need
-    no choosing: their poses are one part."""
+    axes (and about its faces' normals and cylinders' axes where those are undetermined), and their products
+    (:func:`composed_turns`), one of each that an exact symmetry makes alike. Exact symmetries (the transformer's,
+    the bushing's) need no choosing: their poses are one part."""
     directions = [p.normal if p.kind is PrimitiveKind.PLANE else p.axis for p in model.graph.primitives]
     turns = near_symmetries(model.points, model.diameter, axis=axis, directions=np.reshape(directions, (-1, 3)))
     exact = exact_symmetries(renderer, model.points, turns)
