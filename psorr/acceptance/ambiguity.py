@@ -93,8 +93,9 @@ def _near_turns(model, renderer: DepthRenderer, axis: np.ndarray | None) -> np.n
     turns = near_symmetries(model.points, model.diameter, axis=axis, directions=np.reshape(directions, (-1, 3)))
     exact = exact_symmetries(renderer, model.points, turns)
     more = composed_turns(turns, exact, model.points, model.diameter, axis)
-    near = np.concatenate([turns[~exact], more[~exact_symmetries(renderer, model.points, more)]])
-    return distinct_up_to_exact(renderer, model.points, near)
+    more_exact = exact_symmetries(renderer, model.points, more)
+    return distinct_up_to_exact(np.concatenate([turns[~exact], more[~more_exact]]),
+                                np.concatenate([turns[exact], more[more_exact]]))
 
 
 class NearSymmetryResolver:

@@ -39,6 +39,7 @@ FEATURE_MOVE, FEATURE_SHARE = 0.002, 0.1
 MAX_ORDER = 8
 PARALLEL_COS = np.cos(np.radians(10.0))  # a principal axis within 10 degrees of a near-continuous axis is it
 _ACROSS_SIN = np.sin(np.radians(10.0))  # ... and a direction within 10 degrees of square to an axis is across it
+_LARGEST_GROUP = 60  # the icosahedral group's order, the largest finite rotation group but the cyclic and dihedral
 
 
 def near_symmetries(points: np.ndarray, diameter: float, limit: float = NEAR_MEAN_DISTANCE,
@@ -245,17 +246,28 @@ def exact_symmetries(renderer: DepthRenderer, points: np.ndarray, turns: np.ndar
                     dtype=bool)
 
 
-def distinct_up_to_exact(renderer: DepthRenderer, points: np.ndarray, turns: np.ndarray) -> np.ndarray:
-    """(K', 4, 4) one of each set of ``turns`` (K, 4, 4) that give the same poses: S and S' where S^-1 S' is an
-    exact symmetry (:func:`exact_symmetries`), so that a pose turned by either looks the same (a drilled cube's
-    16 near-symmetric turns are two poses of its hole, across the view and along it). The first of each is kept."""
-    tree = cKDTree(points)
-    subset = points[:: max(1, len(points) // 3000)]
+def distinct_up_to_exact(turns: np.ndarray, exact: np.ndarray) -> np.ndarray:
+    """(K', 4, 4) one of each set of ``turns`` (K, 4, 4) that give the same poses: S and S' where S^-1 S' is one of
+    the group the ``exact`` symmetries (E, 4, 4) generate, so that a pose turned by either looks the same (a
+    drilled cube's 16 near-symmetric turns are two poses of its hole, across the view and along it). Rotations
+    within half the least turn tried of each other are one; the first of each set is kept."""
+    # trace(A B^T) = 1 + 2 cos(angle between A and B): at least this, they are one.
+    same = 1.0 + 2.0 * np.cos(np.pi / MAX_ORDER)
+    group = np.eye(3)[None]
+    generators = np.array([E[:3, :3] for E in exact]).reshape(-1, 3, 3)
+    while len(turns) and len(generators) and len(group) < _LARGEST_GROUP:  # closed under composition
+        products = np.einsum("aij,bjk->abik", np.concatenate([generators, group]), group).reshape(-1, 3, 3)
+        new = []
+        for C in products:
+            if np.einsum("ij,nij->n", C, np.concatenate([group, *new])).max() < same:
+                new.append(C[None])
+        if not new:
+            break
+        # A round part's exact turns make no finite group; none of the point groups has more than 60.
+        group = np.concatenate([group, *new])[:_LARGEST_GROUP]
     kept: list[np.ndarray] = []
     for S in turns:
-        # Settled first: turns settled one by one drift by a degree or so, and their quotient with them.
-        between = np.array([_settled(np.linalg.inv(K) @ S, subset, tree)[0] for K in kept]).reshape(-1, 4, 4)
-        if not exact_symmetries(renderer, points, between).any():
+        if all(np.einsum("ij,nij->n", K[:3, :3].T @ S[:3, :3], group).max() < same for K in kept):
             kept.append(S)
     return np.array(kept).reshape(-1, 4, 4)
 
