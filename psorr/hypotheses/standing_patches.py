@@ -105,7 +105,8 @@ class StandingGrid:
         whole = self.labels == label
         raised = np.zeros_like(whole)
         members = np.flatnonzero(self.owner == label)
-        raised.ravel()[self._cell_of(self.points[members])] = True
+        cells, _ = flat_cells(self.points[members], np.eye(4), self.low, self.cell, whole.shape)
+        raised.ravel()[cells] = True
         pieces, count = ndimage.label(opening(raised & whole))
         area = np.bincount(pieces.ravel(), minlength=count + 1) * self.cell**2
         big = [k for k in range(1, count + 1) if area[k] >= min_area]
@@ -114,18 +115,13 @@ class StandingGrid:
         cores = np.where(np.isin(pieces, big), pieces, 0)
         nearest = ndimage.distance_transform_edt(cores == 0, return_distances=False, return_indices=True)
         owner = cores[tuple(nearest)]  # each cell's nearest piece
-        of_point = owner.ravel()[self._cell_of(self.points[members])]
+        of_point = owner.ravel()[cells]
         out = []
         for k in big:
             points = np.zeros(len(self.points), dtype=bool)
             points[members[of_point == k]] = True
             out.append((points, whole & (owner == k)))
         return out
-
-    def _cell_of(self, up: np.ndarray) -> np.ndarray:
-        """(N,) the flat cell index of table-frame points ``up`` (N, 3) on this grid."""
-        rows, cols = (np.floor((up[:, :2] - self.low) / self.cell).astype(np.int64)).T
-        return rows * self.labels.shape[1] + cols
 
 
 def standing_grid(cloud: PointCloud, plane: np.ndarray, params, tallest: float, check: CheckParams,

@@ -62,7 +62,8 @@ def near_symmetries(points: np.ndarray, diameter: float, limit: float = NEAR_MEA
         directions: (D, 3) unit directions, model frame, to try where the principal axes are undetermined.
     """
     centroid = points.mean(axis=0)
-    moments, axes = np.linalg.eigh(np.cov((points - centroid).T))
+    covariance = np.cov((points - centroid).T)
+    moments, axes = np.linalg.eigh(covariance)
     tree = cKDTree(points)
     subset = points[:: max(1, len(points) // 3000)]
     found = []
@@ -78,7 +79,6 @@ def near_symmetries(points: np.ndarray, diameter: float, limit: float = NEAR_MEA
         if not any(np.linalg.norm(S[:3, :3] - F[:3, :3]) < 0.1 for F in found):
             found.append(S)
 
-    covariance = np.cov((points - centroid).T)
     more = _undetermined(directions, moments, axes, limit * diameter)
     for i, direction in enumerate([*axes.T, *more]):
         S, mean = settled(direction, np.pi)
