@@ -31,6 +31,23 @@ def _mean_offset(model, A, B) -> float:
     return mesh_symmetric_add(model.points[::10], A, B, find_symmetries(PARTS[model.name]))
 
 
+def _plate_on_table():
+    """The plate's lone scene (seed 0), and its measured points (N, 3) in the table's frame."""
+    scene = mesh_scene(np.random.default_rng(0), PARTS, "single", names=["plate"])
+    T_table_cloud = np.linalg.inv(table_frame(SceneView(scene.cloud).support_plane))
+    plate = scene.cloud.points[scene.cloud.labels.reshape(-1) == 1]
+    return scene, plate @ T_table_cloud[:3, :3].T + T_table_cloud[:3, 3]
+
+
+def _with_points_on_table(scene, extra: np.ndarray):
+    """``scene``'s measured points and ``extra`` (N, 3, the table's frame), as one unorganised cloud."""
+    from psorr.types import PointCloud
+
+    T_cloud_table = table_frame(SceneView(scene.cloud).support_plane)
+    points = scene.cloud.points[scene.cloud.valid_mask]
+    return PointCloud(np.vstack([points, extra @ T_cloud_table[:3, :3].T + T_cloud_table[:3, 3]]))
+
+
 def test_the_table_frame_puts_the_plane_at_z_0_with_its_normal_up():
     plane = np.array([0.0, -0.6, -0.8, 0.9])
     T = table_frame(plane)
@@ -141,17 +158,8 @@ def test_a_lid_lying_open_side_up_is_a_patch_of_its_own_and_gets_its_pose(librar
 def test_a_plate_under_an_arm_is_its_own_patch_and_still_gets_its_pose(library):
     """Points higher than any model rests (an arm reaching in) over half of the plate: in the table's plane
     they overlap the plate's cells, and joined to its patch they would make it 15 cm high."""
-    from psorr.types import PointCloud
-
-    scene = mesh_scene(np.random.default_rng(0), PARTS, "single", names=["plate"])
-    view = SceneView(scene.cloud)
-    T_table_cloud = np.linalg.inv(table_frame(view.support_plane))
-    plate = scene.cloud.points[scene.cloud.labels.reshape(-1) == 1]
-    local = plate @ T_table_cloud[:3, :3].T + T_table_cloud[:3, 3]
-    arm = local[local[:, 0] > np.median(local[:, 0])] + [0.0, 0.0, 0.15]
-    T_cloud_table = np.linalg.inv(T_table_cloud)
-    points = scene.cloud.points[scene.cloud.valid_mask]
-    cloud = PointCloud(np.vstack([points, arm @ T_cloud_table[:3, :3].T + T_cloud_table[:3, 3]]))
+    scene, local = _plate_on_table()
+    cloud = _with_points_on_table(scene, local[local[:, 0] > np.median(local[:, 0])] + [0.0, 0.0, 0.15])
     matcher = OutlineMatcher(library.models, OutlineParams(enabled=True))
     found = matcher.candidates(cloud, SceneView(cloud))
     model = library.model("plate")
@@ -190,19 +198,9 @@ def test_two_plates_the_closing_joins_are_searched_as_two_patches(library):
     """A second plate 3 mm beside the first: the closing of the standing cells joins them into one patch that no
     model reaches across, so the patch goes on as the two pieces its cells make without the closing, and the
     first plate is posed over its own."""
-    from psorr.types import PointCloud
-
-    scene = mesh_scene(np.random.default_rng(0), PARTS, "single", names=["plate"])
-    view = SceneView(scene.cloud)
-    T_cloud_table = table_frame(view.support_plane)
-    T_table_cloud = np.linalg.inv(T_cloud_table)
-    plate = scene.cloud.points[scene.cloud.labels.reshape(-1) == 1]
-    local = plate @ T_table_cloud[:3, :3].T + T_table_cloud[:3, 3]
+    scene, local = _plate_on_table()
     across = np.linalg.eigh(np.cov(local[:, :2].T))[1][:, 0]  # the plate's short side, on the table
-    beside = local + np.append(across * (np.ptp(local[:, :2] @ across) + 0.003), 0.0)
-    points = np.vstack([scene.cloud.points[scene.cloud.valid_mask],
-                        beside @ T_cloud_table[:3, :3].T + T_cloud_table[:3, 3]])
-    cloud = PointCloud(points)
+    cloud = _with_points_on_table(scene, local + np.append(across * (np.ptp(local[:, :2] @ across) + 0.003), 0.0))
     matcher = OutlineMatcher(library.models, OutlineParams(enabled=True))
     patches = list(matcher._patches(cloud, SceneView(cloud).support_plane))
     assert len(patches) == 2
