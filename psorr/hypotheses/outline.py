@@ -280,6 +280,8 @@ class OutlineMatcher:
         each as a mean of squares of distances truncated at the patch's tolerance, over its square."""
         # A model point is T_model_table Rz(-a) (q - s): the turned patch points less the turned shifts.
         model, outside = self.fields[shape.model], patch.outside
+        # The standing points of a face near the bar lie above it (Patch.lift): expect them there.
+        points = points - np.array([0.0, 0.0, patch.lift(shape.height)])
         return self._resting_costs(shape.T_model_table[:3, :3] @ _turns(-angles), shape.T_model_table[:3, 3],
                                    points, shifts, _turns(angles)[:, :2, :2], shape.silhouette,
                                    model.distances, model.low, model.cell, outside.distances, outside.low,
