@@ -39,9 +39,13 @@ def test_a_face_far_above_the_bar_or_without_noise_is_not_lifted():
     assert Patch(np.zeros((1, 3)), None, 0.006).lift(0.002) == 0.0
 
 
+@pytest.fixture(scope="module")
+def library(tmp_path_factory):
+    return trained_library(PARTS, tmp_path_factory.mktemp("standing"))
+
+
 @pytest.mark.parametrize("seed", range(4))
-def test_a_thin_disc_far_from_the_sensor_fits_its_patch_better_than_a_thicker_smaller_plate(tmp_path, seed):
-    library = trained_library(PARTS, tmp_path)
+def test_a_thin_disc_far_from_the_sensor_fits_its_patch_better_than_a_thicker_smaller_plate(library, seed):
     params = SceneParams(camera_distance=(0.9, 0.9), camera_tilt_deg=(20.0, 20.0))
     scene = mesh_scene(np.random.default_rng(seed), PARTS, "single", names=["disc"], params=params)
     found = OutlineMatcher(library.models, OutlineParams()).candidates(scene.cloud, SceneView(scene.cloud))
