@@ -66,6 +66,9 @@ def _arguments(argv):
     parser.add_argument("--methods", default=",".join(METHODS))
     parser.add_argument("--cad", type=Path, help=f"the parts' folder (default: {DEFAULT_CAD})")
     parser.add_argument("--units", default="mm", choices=tuple(UNITS), help="the meshes' length unit")
+    parser.add_argument("--min-length", type=float, default=gp.MIN_LENGTH * 1e3, metavar="MM",
+                        help="parts shorter than this (the longest side of their bounding box) are left out; the "
+                             "issue's benchmark: 25 mm (a Kinect-class sensor shows little of less)")
     parser.add_argument("--note", default="", help="what else ran on the machine, for the record")
     parser.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "results")
     parser.add_argument("--report-only", action="store_true",
@@ -74,6 +77,8 @@ def _arguments(argv):
     unknown = sorted(set(args.methods.split(",")) - set(METHODS))
     if unknown:
         parser.error(f"unknown methods {unknown}; choose from {', '.join(METHODS)}")
+    if not args.min_length > 0:
+        parser.error(f"--min-length {args.min_length:g}: give a length in millimetres above 0")
     if args.cad is not None and not args.cad.is_dir():
         parser.error(f"{args.cad}: no such folder; give a folder of meshes with --cad (the Prusa i3 parts: see "
                      f"../shared/cad/README.md)")
@@ -219,8 +224,8 @@ def main(argv=None) -> int:
         return 0
     args.cad = args.cad or DEFAULT_CAD
     paths = {p.stem: p for p in sorted(args.cad.iterdir()) if p.suffix.lower() in MESH_SUFFIXES}
-    meshes, short = checked_split(load_meshes(args.cad, args.units), args.cad)
-    print(f"{len(meshes)} parts of at least 25 mm in {args.cad}"
+    meshes, short = checked_split(load_meshes(args.cad, args.units), args.cad, args.min_length / 1e3)
+    print(f"{len(meshes)} parts of at least {args.min_length:g} mm in {args.cad}"
           + (f"; left out as shorter: {', '.join(short)}" if short else "; none shorter"), file=sys.stderr)
     base = "generalization" if gp.is_prusa(meshes) else f"generalization-{args.cad.resolve().name}"
     stem = f"{base}.quick" if args.quick else base

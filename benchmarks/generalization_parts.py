@@ -31,7 +31,7 @@ from psorr.synthetic.mesh_symmetry import MeshSymmetry, find_symmetries, match_d
 from psorr.synthetic.part_shapes import PartShape, part_shape
 
 MIN_LENGTH = 0.025  # m: the issue's parts are those at least 25 mm long at true scale
-SIZES = (("25-50 mm", 0.05), ("50-100 mm", 0.1), ("over 100 mm", np.inf))
+SIZES = (("under 25 mm", MIN_LENGTH), ("25-50 mm", 0.05), ("50-100 mm", 0.1), ("over 100 mm", np.inf))
 ADD_SHARE = 0.1  # a detection is correct within a symmetry-aware ADD of 0.1 x the model's diameter
 ADD_SAMPLES = 1000
 # An unfixed turn about an axis is tried every 5 degrees: at the axis reach r <= d / 2 a step moves a point by
@@ -63,19 +63,20 @@ def size_bin(mesh: trimesh.Trimesh) -> str:
     return next(name for name, upper in SIZES if length(mesh) < upper)
 
 
-def checked_split(meshes: dict[str, trimesh.Trimesh], folder: Path) -> tuple[dict, list[str]]:
-    """(name -> mesh of the parts at least MIN_LENGTH long, the names left out for being shorter),
+def checked_split(meshes: dict[str, trimesh.Trimesh], folder: Path,
+                  min_length: float = MIN_LENGTH) -> tuple[dict, list[str]]:
+    """(name -> mesh of the parts at least ``min_length`` (m) long, the names left out for being shorter),
     after checking that a folder holding most of the fixed split's parts holds exactly them."""
-    kept = {n: m for n, m in meshes.items() if length(m) >= MIN_LENGTH}
+    kept = {n: m for n, m in meshes.items() if length(m) >= min_length}
     if not kept:
-        raise SplitError(f"{folder}: no part is at least {MIN_LENGTH * 1e3:.0f} mm long (the benchmark's smallest "
-                         f"part; a Kinect-class sensor resolves nothing smaller); check --units")
+        raise SplitError(f"{folder}: no part is at least {min_length * 1e3:g} mm long (the benchmark's smallest "
+                         f"part); check --units, or lower --min-length")
     if is_prusa(kept):
         listed = set(DEV) | set(TEST)
         missing, unlisted = sorted(listed - set(kept)), sorted(set(kept) - listed)
         if missing or unlisted:
             raise SplitError(f"{folder}: the split in benchmarks/generalization_parts.py does not match the "
-                             f"folder's parts of at least {MIN_LENGTH * 1e3:.0f} mm (missing: {missing}, not in "
+                             f"folder's parts of at least {min_length * 1e3:g} mm (missing: {missing}, not in "
                              f"the split: {unlisted}); give the Prusa i3 folder with --cad, or update DEV and TEST")
     return kept, sorted(set(meshes) - set(kept))
 

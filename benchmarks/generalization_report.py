@@ -15,7 +15,7 @@ PEER = "o3d_global"
 TARGETS = {"single": 0.95, "clutter": 0.85, "occluded": 0.85, "thin": 0.8, "false_per_scene": 0.2,
            "median_ms": 300.0, "peer_share": 0.25, "train_ms": 1000.0}
 CLASSES = ("thin", "flanged", "turned", "freeform", "prismatic")
-SIZES = ("25-50 mm", "50-100 mm", "over 100 mm")
+SIZES = ("under 25 mm", "25-50 mm", "50-100 mm", "over 100 mm")
 
 
 def _table(header: list[str], rows: list[list], align: str = "") -> str:

@@ -7,7 +7,7 @@ generalization benchmark gives on each; this script writes them, so those number
     python benchmarks/generalization.py --cad OUT/NAME --units mm --split all --clutter 6 --occluded 4
 
 Each set is millimetres but ``centimetres`` (as its name says, in OBJ, PLY and STL). ``small_fittings`` holds
-parts under the benchmark's 25 mm floor (its page run lowered the floor to 10 mm). The sets are built with
+parts under the benchmark's 25 mm floor: run it with ``--min-length 10``. The sets are built with
 trimesh's booleans on manifold3d.
 """
 

@@ -35,3 +35,15 @@ def test_the_script_writes_a_set_the_benchmark_reads_in_its_units(tmp_path):
     parts = load_meshes(tmp_path / "centimetres", "cm")
     assert {p.suffix for p in (tmp_path / "centimetres").iterdir()} == {".obj", ".ply", ".stl"}
     assert 0.05 < max(np.max(m.extents) for m in parts.values()) < 0.1
+
+
+def test_small_fittings_need_the_floor_lowered_and_are_sized_under_25_mm(tmp_path):
+    import generalization_parts as parts
+
+    probe_parts.write_set("small_fittings", tmp_path)
+    meshes = load_meshes(tmp_path, "mm")
+    with pytest.raises(parts.SplitError, match="--min-length"):
+        parts.checked_split(meshes, tmp_path)
+    kept, short = parts.checked_split(meshes, tmp_path, min_length=0.01)
+    assert len(kept) == 6 and short == []
+    assert {parts.size_bin(m) for m in kept.values()} == {"under 25 mm"}
