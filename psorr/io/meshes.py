@@ -1,4 +1,5 @@
-"""Reading triangle meshes (STL, OBJ, PLY) for training, with the checks a CAD export needs.
+"""Reading triangle meshes (STL, OBJ, PLY, and STEP through :mod:`psorr.io.step`) for training, with the
+checks a CAD export needs.
 
 Every failure caused by the file raises CloudFileError naming it and the fix. What is taken but may
 not be what the user meant is said (a warning): several meshes in one file, trained as one model,
@@ -13,19 +14,31 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from psorr.errors import CloudFileError
+from psorr.errors import CloudFileError, MissingExtraError
 from psorr.io.clouds import require_file, require_suffix
+from psorr.io.step import STEP_SUFFIXES, declared_units, is_step, load_step_scene
 
 if TYPE_CHECKING:
     import trimesh
 
-MESH_SUFFIXES = (".stl", ".obj", ".ply")
+MESH_SUFFIXES = (".stl", ".obj", ".ply") + STEP_SUFFIXES
 UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254}
 """Metres per unit of the length units a mesh file may be in (CAD: mostly mm, US CAD often in; some OBJ: cm)."""
 
 
+def file_units(path, units: str | None) -> str | None:
+    """The length unit to read ``path`` in: a STEP file's declared unit (``units``, if given, must agree),
+    else ``units`` as given (None: not known)."""
+    declared = declared_units(path)
+    if declared is None or units is None or units == declared:
+        return declared or units
+    raise CloudFileError(path, f"declares its lengths in {declared}, but units {units!r} were given",
+                         f"give units {declared!r} or none: a STEP file's own unit is used")
+
+
 def read_mesh(path) -> trimesh.Trimesh:
-    """Read a triangle mesh from .stl, .obj or .ply (vertices in the file's units).
+    """Read a triangle mesh from .stl, .obj, .ply, or .step/.stp (vertices in the file's units; a STEP file's
+    are those it declares, :func:`psorr.io.step.declared_units`).
 
     A file holding several meshes is concatenated into one (trimesh ``force='mesh'``), with a warning that
     names them; an inside-out closed mesh is turned right side out, with a warning.
@@ -39,10 +52,13 @@ def read_mesh(path) -> trimesh.Trimesh:
     path = Path(path)
     require_suffix(path, MESH_SUFFIXES, "mesh")
     require_file(path)
+    units = declared_units(path)
     try:
         # Unprocessed first: processing drops the faces of NaN or inf vertices without a word.
-        scene = trimesh.load_scene(path, process=False)
+        scene = load_step_scene(path) if is_step(path) else trimesh.load_scene(path, process=False)
         mesh = _one_mesh(scene)
+    except MissingExtraError:
+        raise
     except Exception as exc:  # trimesh's many loaders raise many exception types
         raise CloudFileError(path, f"cannot be read as a mesh: {type(exc).__name__}: {exc}",
                              "re-export it as STL, OBJ or PLY") from None
@@ -58,6 +74,8 @@ def read_mesh(path) -> trimesh.Trimesh:
     if broken:
         raise CloudFileError(path, f"{broken} of its {len(mesh.vertices)} vertices are NaN or infinite",
                              "repair or re-export the mesh")
+    if units is not None:  # OpenCASCADE gives metres
+        mesh.apply_scale(1.0 / UNITS[units])
     _merge_duplicate_vertices(path, mesh)
     if len(mesh.faces) == 0:
         if len(mesh.vertices) == 0:
@@ -99,6 +117,9 @@ def _merge_duplicate_vertices(path: Path, mesh) -> None:
     from trimesh import util
     from trimesh.constants import tol
 
+    if is_step(path):  # OpenCASCADE gives each face its own vertex normals; the faces meet at the same points
+        mesh.merge_vertices(merge_tex=True, merge_norm=True)
+        return
     if path.suffix.lower() != ".stl":
         mesh.process()
         return

@@ -25,7 +25,7 @@ from psorr.checks import params as check
 from psorr.decomposition import DecomposeParams, decompose
 from psorr.errors import CloudFileError, InvalidInputError
 from psorr.geometry.diameter import diameter as point_diameter
-from psorr.io.meshes import MESH_SUFFIXES, UNITS, read_mesh
+from psorr.io.meshes import MESH_SUFFIXES, UNITS, file_units, read_mesh
 from psorr.library.cache import entry_path, load_entry, store_entry
 from psorr.library.file_format import load_models, save_models
 from psorr.library.ppf import HashParams, PairTable
@@ -82,11 +82,13 @@ class Model:
 
 
 def load_mesh_in_metres(path, units: str | None = None) -> trimesh.Trimesh:
-    """Read a mesh and scale it to metres. Without `units`, a mesh whose extent
-    is above 2 m or below 5 mm is refused: it is almost surely in other units."""
+    """Read a mesh and scale it to metres. A STEP file's declared unit is used (`units`, if given, must
+    agree). Without `units`, another mesh whose extent is above 2 m or below 5 mm is refused: it is
+    almost surely in other units."""
     path = Path(path)
     if units is not None and units not in UNITS:
         raise InvalidInputError(f"units must be one of {sorted(UNITS)}, got {units!r}")
+    units = file_units(path, units)
     mesh = read_mesh(path)
     extent = float(np.max(mesh.extents))
     if units is None and extent > 2.0:

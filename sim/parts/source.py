@@ -9,7 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
-from psorr.io.meshes import UNITS
+from psorr.errors import PsorrError
+from psorr.io.meshes import UNITS, file_units
 from sim.errors import SimInputError
 
 PLACES = ("fixture", "tote")
@@ -23,8 +24,9 @@ class MeshPart:
     """A part the cell takes from a mesh file rather than from the catalog.
 
     Attributes:
-        path: the mesh file (STL, OBJ or PLY), absolute.
-        units: the file's length unit: ``"m"``, ``"cm"``, ``"mm"`` or ``"in"``.
+        path: the mesh file (STL, OBJ, PLY or STEP), absolute.
+        units: the file's length unit: ``"m"``, ``"cm"``, ``"mm"`` or ``"in"``; None (the default) for the unit a
+            STEP file declares, else metres. Given for a STEP file, it must be the one the file declares.
         name: the part's name in the cell and in the recognizer's library (default: the file's stem).
         count: how many of it go on the table.
         color: its colour: (3,) RGB in [0, 1] or a name of ``psorr.segment.PALETTE`` (``"red"``), for every
@@ -36,7 +38,7 @@ class MeshPart:
     """
 
     path: Path
-    units: str = "m"
+    units: str | None = None
     name: str = ""
     count: int = 1
     color: tuple[float, float, float] | None = None
@@ -48,8 +50,9 @@ class MeshPart:
         object.__setattr__(self, "path", Path(self.path))
         if not self.name:
             object.__setattr__(self, "name", self.path.stem)
-        if self.units not in UNITS:
+        if self.units is not None and self.units not in UNITS:
             raise SimInputError(f"units must be one of {', '.join(UNITS)}, got {self.units!r}")
+        object.__setattr__(self, "units", _units(self.path, self.units))
         if not _NAME.match(self.name):
             raise SimInputError(f"name must start with a letter and hold only letters, digits, '_', '.' or '-' "
                                 f"(it names bodies and files), got {self.name!r}")
@@ -69,6 +72,17 @@ class MeshPart:
     def scale(self) -> float:
         """Metres per unit of the file."""
         return UNITS[self.units]
+
+
+def _units(path: Path, units: str | None) -> str:
+    """The unit to read ``path`` in: the one a STEP file declares (which ``units`` must agree with), else
+    ``units``, else metres."""
+    if not path.is_file():  # said where the file is read
+        return units or "m"
+    try:
+        return file_units(path, units) or "m"
+    except PsorrError as exc:
+        raise SimInputError(f"units: {exc}") from None
 
 
 def _instance_colors(value, count: int) -> tuple[tuple[float, float, float], ...]:

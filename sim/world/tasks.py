@@ -167,8 +167,8 @@ def _mesh_part(path: Path, entry: _Lined) -> MeshPart:
             raise TaskFileError(path, f"line {entry.lines[key]}: unknown key {key!r} in a mesh workpiece",
                                 f"valid keys are {', '.join(MESH_KEYS)}")
     if "mesh" not in entry or not isinstance(entry["mesh"], str):
-        raise TaskFileError(path, f"line {entry.line}: a mesh workpiece needs mesh: FILE (a path to an STL, OBJ or "
-                            "PLY file)", _EXAMPLE)
+        raise TaskFileError(path, f"line {entry.line}: a mesh workpiece needs mesh: FILE (a path to an STL, OBJ, "
+                            "PLY or STEP file)", _EXAMPLE)
     mesh = (path.parent / entry["mesh"]).resolve()
     if not mesh.is_file():
         raise TaskFileError(path, f"line {entry.lines['mesh']}: no mesh file {mesh}",

@@ -82,7 +82,7 @@ def test_units_with_a_saved_library_are_refused(tmp_path, block):
 
 
 def test_files_in_a_model_folder_that_are_not_meshes_are_named(tmp_path, block, capsys):
-    (tmp_path / "part.STEP").write_text("ISO-10303-21;")
+    (tmp_path / "part.IGES").write_text("ISO-10303-21;")
     (tmp_path / "README.md").write_text("notes")
     lib = library_from_arguments([tmp_path])
     assert lib.names == ["block"]

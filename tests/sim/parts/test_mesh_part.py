@@ -1,5 +1,7 @@
 """A user's mesh becomes a part of the cell (sim/parts/derive.py), is recognised there and picked. Headless."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 import trimesh
@@ -81,6 +83,17 @@ def test_a_part_given_in_the_wrong_unit_is_too_small_for_the_sensor(tmp_path):
     trimesh.creation.box((0.04, 0.03, 0.02)).export(tmp_path / "block.stl")  # metres, read as millimetres
     with pytest.raises(PartMeshError, match="too small for the sensor.*is that the file's unit"):
         upright_mesh(MeshPart(tmp_path / "block.stl", units="mm"))
+
+
+def test_a_step_part_is_read_in_the_unit_it_declares(tmp_path):
+    pytest.importorskip("cascadio", reason="the step extra (pip install 'psorr[step]') is not installed")
+    step = Path(__file__).parents[2] / "psorr" / "io" / "data" / "bracket_in.step"
+    part = MeshPart(step)  # no units: the file's own
+    assert part.units == "in"
+    assert upright_mesh(part).volume == pytest.approx(20324.56e-9, rel=1e-3)  # the bracket's, in m^3
+    with pytest.raises(SimInputError, match="declares its lengths in in, but units 'mm' were given"):
+        MeshPart(step, units="mm")
+    assert MeshPart(tmp_path / "later.stl").units == "m"  # a file not there yet: said when it is read
 
 
 def test_the_cell_recognises_and_picks_a_users_part(part, cache):
