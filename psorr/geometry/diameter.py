@@ -8,12 +8,18 @@ sqrt(2 R^2 + 2|y|^2 - L^2) of -y, R the largest offset: a small ball about the a
 tree. L starts as the longest of a few farthest-point sweeps, which on most shapes is already the diameter,
 and grows as pairs are measured; points are taken farthest from the centre first, and once a point's ball
 is empty, so are those of all nearer ones.
+
+The balls are small only where the shape is nearly centrally symmetric about the centre. A three-lobed knob
+reaches 1.27 times half its diameter from its box's centre, and each ball of its 590,000 finely tessellated
+vertices held 350,000 points; its hull has 1,757 corners. So the search runs over the hull's corners (the
+diameter's two ends are among them), which costs 1.7 s on a geodesic ball of 163,842 vertices, where the
+hull keeps them all, and 0.2 s on the knob.
 """
 
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial import cKDTree
+from scipy.spatial import ConvexHull, QhullError, cKDTree
 from scipy.spatial.distance import pdist
 
 from psorr.errors import InvalidInputError
@@ -33,6 +39,8 @@ def diameter(points) -> float:
     points = np.unique(points, axis=0)  # an unmerged mesh repeats its vertices; each copy would be searched
     if len(points) < 2:
         return 0.0
+    if len(points) > _ALL_PAIRS:
+        points = _hull_corners(points)
     if len(points) <= _ALL_PAIRS:
         return float(pdist(points).max())
     offsets = points - 0.5 * (points.min(axis=0) + points.max(axis=0))
@@ -46,15 +54,36 @@ def diameter(points) -> float:
         hopeful = squared > 0
         if not hopeful.any():
             break  # the farthest point left has an empty ball, and so has every nearer one
+        start += len(block)
         block, radii = block[hopeful], np.sqrt(squared[hopeful]) * (1 + _SLACK) + _SLACK * widest
         counts = tree.query_ball_point(-offsets[block], radii, return_length=True)
-        taken = max(1, int(np.searchsorted(np.cumsum(counts), _PAIRS, side="right")))
-        length, ends = _longest(tree, points, offsets, block[:taken], radii[:taken], counts[:taken])
-        if length > best:
-            best, pair = length, ends
-        start += taken
+        for taken in _batches(counts):  # counted once per block, measured a batch at a time
+            length, ends = _longest(tree, points, offsets, block[taken], radii[taken], counts[taken])
+            if length > best:
+                best, pair = length, ends
     # The pair measured as every pair is (pdist): the same value to the bit, whichever way it was found.
     return float(pdist(points[list(pair)])[0])
+
+
+def _batches(counts: np.ndarray):
+    """Slices of consecutive balls that hold about ``_PAIRS`` points together (a ball holding more, alone)."""
+    first, held = 0, 0
+    for k, count in enumerate(counts.tolist()):
+        if held and held + count > _PAIRS:
+            yield slice(first, k)
+            first, held = k, 0
+        held += count
+    if first < len(counts):
+        yield slice(first, len(counts))
+
+
+def _hull_corners(points: np.ndarray) -> np.ndarray:
+    """The corners of the convex hull of (N, 3) ``points``, among which the diameter's ends lie; all the points
+    when Qhull cannot build a hull (they lie in a plane or on a line)."""
+    try:
+        return points[np.sort(ConvexHull(points).vertices)]
+    except QhullError:
+        return points
 
 
 def _longest(tree: cKDTree, points: np.ndarray, offsets: np.ndarray, block: np.ndarray, radii: np.ndarray,

@@ -42,6 +42,15 @@ def test_a_ball_whose_every_vertex_is_a_hull_corner_is_measured_exactly():
     assert diameter(vertices) == pytest.approx(0.06, rel=1e-12)
 
 
+def test_a_finely_tessellated_part_far_from_centrally_symmetric_is_measured():
+    # A triangular prism reaches 1.3 times half its diameter from its box's centre, so each point's antipodal
+    # ball held most of the 300,000 points (as a three-lobed knob's did) and the search did not end.
+    triangle = [(0.0, 0.0), (0.04, 0.0), (0.02, 0.04 * np.sqrt(3) / 2)]
+    prism = trimesh.Trimesh([(x, y, z) for z in (0.0, 0.01) for x, y in triangle]).convex_hull
+    points = np.vstack([prism.vertices, trimesh.sample.sample_surface(prism, 300_000, seed=6)[0]])
+    assert diameter(points) == pytest.approx(np.hypot(0.04, 0.01), rel=1e-12)  # corner to corner
+
+
 def test_repeated_points_are_measured_once():
     rng = np.random.default_rng(5)
     distinct = rng.uniform(size=(10, 3))
