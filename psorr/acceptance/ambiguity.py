@@ -27,6 +27,7 @@ from psorr.acceptance.icp import refine_icp
 from psorr.acceptance.projective import refine_projective
 from psorr.geometry.rotations import turn_about_line
 from psorr.geometry.surface_moments import surface_area
+from psorr.library.derived import derived
 from psorr.library.symmetries import (
     AXIS_TEST_DEGREES,
     composed_turns,
@@ -75,6 +76,33 @@ FEATURES_SHOW = (2 * DISCRIMINATIVE_SIGMAS) ** 2
 _FOUND: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
+def _inputs(model) -> tuple:
+    """Everything of ``model`` its near-symmetries are found from: samples, mesh, diameter, primitives' directions."""
+    return (model.points, model.normals, model.vertices, model.faces, model.diameter, _directions(model),
+            [p.kind is PrimitiveKind.PLANE for p in model.graph.primitives])
+
+
+def _directions(model) -> np.ndarray:
+    """(P, 3) the model's planes' normals and cylinders' axes."""
+    return np.reshape([p.normal if p.kind is PrimitiveKind.PLANE else p.axis for p in model.graph.primitives], (-1, 3))
+
+
+def _encode_found(found: tuple) -> dict:
+    turns, exact, axis, slide, area, reach = found
+    arrays = {"turns": turns, "exact_but_features": exact, "area": area, "axis_reach": reach}
+    if axis is not None:
+        arrays["axis_point"], arrays["axis_direction"] = axis
+    if slide is not None:
+        arrays["slide"] = slide
+    return arrays
+
+
+def _decode_found(arrays) -> tuple:
+    axis = (arrays["axis_point"], arrays["axis_direction"]) if "axis_point" in arrays else None
+    return (arrays["turns"], arrays["exact_but_features"], axis, arrays.get("slide"), float(arrays["area"]),
+            float(arrays["axis_reach"]))
+
+
 def _axis_reach(points: np.ndarray, axis: tuple[np.ndarray, np.ndarray] | None) -> float:
     """How far (m) a turn by one radian about ``axis`` (a point on it, its direction) carries the sample of
     ``points`` (N, 3) furthest from it; 0 without an axis."""
@@ -89,8 +117,7 @@ def _near_turns(model, renderer: DepthRenderer, axis: np.ndarray | None) -> np.n
     axes (and about its faces' normals and cylinders' axes where those are undetermined), and their products
     (:func:`composed_turns`), one of each that an exact symmetry makes alike. Exact symmetries (the transformer's,
     the bushing's) need no choosing: their poses are one part."""
-    directions = [p.normal if p.kind is PrimitiveKind.PLANE else p.axis for p in model.graph.primitives]
-    turns = near_symmetries(model.points, model.diameter, axis=axis, directions=np.reshape(directions, (-1, 3)))
+    turns = near_symmetries(model.points, model.diameter, axis=axis, directions=_directions(model))
     exact = exact_symmetries(renderer, model.points, turns)
     more = composed_turns(turns, exact, model.points, model.diameter, axis)
     more_exact = exact_symmetries(renderer, model.points, more)
@@ -111,14 +138,18 @@ class NearSymmetryResolver:
         self.model = model
         self.renderer = DepthRenderer(model.vertices, model.faces)
         found = _FOUND.get(model)
-        if found is None:  # about 0.1 s a model, so once per model object however many recognizers use it
-            axis = near_continuous_axis(model, self.renderer)
-            turns = _near_turns(model, self.renderer, None if axis is None else axis[1])
-            found = _FOUND[model] = (turns, exact_but_features(model.points, turns), axis,
-                                     near_uniform_direction(model, self.renderer),
-                                     surface_area(model.vertices, model.faces), _axis_reach(model.points, axis))
+        if found is None:  # about 0.2 s a model: once per model object, and kept on disk for the next process
+            found = _FOUND[model] = derived("near-symmetries", _inputs(model), lambda: self._find(model),
+                                            _encode_found, _decode_found)
         self.turns, self._exact_but_features, self.axis, self.slide, self._area, self._axis_reach = found
         self._centre = model.points.mean(axis=0)
+
+    def _find(self, model) -> tuple:
+        """(turns, which are exact but for features, axis or None, slide direction or None, area, axis reach)."""
+        axis = near_continuous_axis(model, self.renderer)
+        turns = _near_turns(model, self.renderer, None if axis is None else axis[1])
+        return (turns, exact_but_features(model.points, turns), axis, near_uniform_direction(model, self.renderer),
+                surface_area(model.vertices, model.faces), _axis_reach(model.points, axis))
 
     @property
     def has_broad_twins(self) -> bool:

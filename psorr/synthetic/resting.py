@@ -82,21 +82,42 @@ def stable_rests(mesh: trimesh.Trimesh) -> tuple[Rest, ...]:
     """
     key = _mesh_key(mesh)
     if key not in _RESTS:
-        try:
-            import networkx  # noqa: F401  (trimesh imports it softly and fails late without it)
-        except ImportError as exc:
-            raise PsorrError("resting poses need networkx (trimesh.poses.compute_stable_poses): "
-                             "pip install networkx") from exc
-        hull = _resting_hull(mesh)
-        with np.errstate(invalid="ignore"):  # trimesh takes square roots of rounding-negative numbers
-            transforms, probabilities = trimesh.poses.compute_stable_poses(hull, center_mass=centre_of_mass(mesh))
-        if len(probabilities) == 0:
-            raise InvalidInputError("trimesh found no stable resting pose for the mesh; is it a closed solid?")
-        probabilities = np.asarray(probabilities) / np.sum(probabilities)
-        order = _canonical_order(np.asarray(transforms), probabilities)
-        # Outlines and heights from what the rests were found on: a simplified hull's few vertices, not 160,000.
-        _RESTS[key] = tuple(_rest(transforms[k], probabilities[k], hull) for k in order)
+        from psorr.library.derived import derived  # the disk cache: the next process reads them
+
+        _RESTS[key] = derived("rests", (mesh.vertices, mesh.faces), lambda: _found_rests(mesh), _encode, _decode)
     return _RESTS[key]
+
+
+def _found_rests(mesh: trimesh.Trimesh) -> tuple[Rest, ...]:
+    """The stable resting poses of ``mesh``, found (see :func:`stable_rests`)."""
+    try:
+        import networkx  # noqa: F401  (trimesh imports it softly and fails late without it)
+    except ImportError as exc:
+        raise PsorrError("resting poses need networkx (trimesh.poses.compute_stable_poses): "
+                         "pip install networkx") from exc
+    hull = _resting_hull(mesh)
+    with np.errstate(invalid="ignore"):  # trimesh takes square roots of rounding-negative numbers
+        transforms, probabilities = trimesh.poses.compute_stable_poses(hull, center_mass=centre_of_mass(mesh))
+    if len(probabilities) == 0:
+        raise InvalidInputError("trimesh found no stable resting pose for the mesh; is it a closed solid?")
+    probabilities = np.asarray(probabilities) / np.sum(probabilities)
+    order = _canonical_order(np.asarray(transforms), probabilities)
+    # Outlines and heights from what the rests were found on: a simplified hull's few vertices, not 160,000.
+    return tuple(_rest(transforms[k], probabilities[k], hull) for k in order)
+
+
+def _encode(rests: tuple[Rest, ...]) -> dict:
+    return {"T_table_model": np.array([r.T_table_model for r in rests]).reshape(-1, 4, 4),
+            "probability": np.array([r.probability for r in rests], dtype=np.float64),
+            "height": np.array([r.height for r in rests], dtype=np.float64),
+            "footprint": np.concatenate([r.footprint for r in rests]).reshape(-1, 2),
+            "footprint_sizes": np.array([len(r.footprint) for r in rests], dtype=np.int64)}
+
+
+def _decode(arrays) -> tuple[Rest, ...]:
+    footprints = np.split(arrays["footprint"], np.cumsum(arrays["footprint_sizes"])[:-1])
+    return tuple(Rest(T, float(p), f, float(h)) for T, p, f, h in
+                 zip(arrays["T_table_model"], arrays["probability"], footprints, arrays["height"]))
 
 
 def _resting_hull(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
