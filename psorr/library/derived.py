@@ -3,9 +3,10 @@
 A recognizer finds each model's near-symmetries (about 0.2 s a Prusa part, rendering turned samples against its
 mesh) and its stable resting poses (about 0.07 s, trimesh's topple graph); 20 models took 5.8 s before the first
 scene, in every process: every ``psorr recognize`` paid it again. Each is a function of the model's arrays and of
-psorr's code, so it is kept under the training cache's folder (``derived/``), keyed by the hash of those arrays and
-:func:`psorr.library.cache.code_fingerprint`, as plain arrays (``.npz``, read without pickle). An entry that cannot
-be read is derived again; a folder that cannot be written costs one warning and the next process's shortcut.
+psorr's code, so it is kept under the training cache's folder (``derived/``), keyed by the hash of those arrays,
+:func:`psorr.library.cache.code_fingerprint` and Open3D's version, as plain arrays (``.npz``, read without
+pickle). An entry that cannot be read is derived again; a folder that cannot be written costs one warning and the
+next process's shortcut.
 """
 
 from __future__ import annotations
@@ -14,6 +15,8 @@ import hashlib
 import os
 import warnings
 from collections.abc import Callable, Mapping, Sequence
+from functools import cache
+from importlib import metadata
 from typing import TypeVar
 
 import numpy as np
@@ -38,8 +41,17 @@ def derived(kind: str, inputs: Sequence, derive: Callable[[], T], encode: Callab
     return value
 
 
+@cache
+def _open3d_version() -> str:
+    """Open3D's version: it measures the turned samples' distances, and training's fingerprint leaves it out."""
+    try:
+        return metadata.version("open3d")
+    except metadata.PackageNotFoundError:
+        return "absent"
+
+
 def _key(kind: str, inputs: Sequence) -> str:
-    digest = hashlib.sha256(f"{kind}|{code_fingerprint()}".encode())
+    digest = hashlib.sha256(f"{kind}|{code_fingerprint()}|open3d={_open3d_version()}".encode())
     for item in inputs:
         array = np.ascontiguousarray(item)
         digest.update(f"|{array.dtype.str}{array.shape}|".encode())
