@@ -13,6 +13,7 @@ import numpy as np
 
 from psorr.checks.clouds import require_seen_from_origin
 from psorr.cli_labels import decompose_command, segment_command
+from psorr.cli_train import add_train_parser
 from psorr.errors import PsorrError
 from psorr.io.meshes import UNITS
 from psorr.types import Method
@@ -174,14 +175,15 @@ def build_parser() -> argparse.ArgumentParser:
     seg.set_defaults(run=segment_command)
     rec = sub.add_parser("recognize", help="find CAD-trained workpieces and their poses in a depth cloud")
     rec.add_argument("models", nargs="+", metavar="MODELS",
-                     help="a folder of meshes (.stl/.obj/.ply), mesh files, or a saved library (.npz); "
-                          "each model is named by its file stem")
+                     help="a folder of meshes (.stl/.obj/.ply/.step), mesh files, or a saved library (.npz, from "
+                          "psorr train); each model is named by its file stem")
     rec.add_argument("scene", metavar="SCENE", help="cloud file in metres, sensor frame, table and all")
     rec.add_argument("--method", choices=[m.value for m in Method], default=Method.PSORR.value,
                      help="psorr: pairs of primitives (default); psg: cliques of the shape graph first; auto: "
                           "cliques for the models of many primitives only; orr: random point pairs (the baseline)")
     rec.add_argument("--units", choices=tuple(UNITS), default=None,
-                     help="units of the meshes (default m; meshes of implausible size are refused without it)")
+                     help="units of the meshes (default m, or a STEP file's own; meshes of implausible size are "
+                          "refused without it)")
     rec.add_argument("--json", action="store_true", help="print exactly one JSON line to stdout")
     rec.add_argument("--png", metavar="OVERLAY.png", help="draw the recognised models over the cloud")
     rec.add_argument("--seed", type=seed, default=0)
@@ -194,6 +196,7 @@ def build_parser() -> argparse.ArgumentParser:
                      help="segment the scene by colour and distance first and recognise each segment alone; "
                           "each detection carries its segment's colour (a cloud without colours: by distance)")
     rec.set_defaults(run=_recognize)
+    add_train_parser(sub, tuple(UNITS))
     return parser
 
 

@@ -30,7 +30,7 @@ def library_from_arguments(items, units: str | None = None, progress=None) -> Mo
             if not found:
                 raise CloudFileError(p, f"the folder holds no {'/'.join(MESH_SUFFIXES)} meshes", _mesh_folder_hint(p))
             skipped = sorted(f.name for f in p.iterdir() if f.is_file() and f not in found)
-            if skipped:  # said, not silently passed over: a .step or .glb there may be a part the user meant
+            if skipped:  # said, not silently passed over: a .glb or .iges there may be a part the user meant
                 print(f"{p}: skipping {len(skipped)} file(s) that are not {'/'.join(MESH_SUFFIXES)} meshes: "
                       f"{', '.join(skipped[:8])}{' ...' if len(skipped) > 8 else ''}", file=sys.stderr)
             meshes += found

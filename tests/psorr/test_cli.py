@@ -254,3 +254,33 @@ def test_the_json_record_of_a_detection_holds_what_the_view_left_open():
     pulley = Detection("pulley", np.eye(4), 0.8, unfixed_turn=UnfixedTurn([0.0, 0.0, 0.01], [0.0, 0.0, 1.0]))
     assert json.loads(json.dumps(_left_open_record(pulley))) == {
         "unfixed_turn": {"point": [0.0, 0.0, 0.01], "direction": [0.0, 0.0, 1.0]}}
+
+
+def test_train_saves_a_library_that_recognize_takes(tmp_path, capsys):
+    import trimesh
+
+    from psorr.synthetic.workpiece_scenes import workpiece_scene
+
+    parts = {"block": trimesh.creation.box(extents=(60.0, 40.0, 30.0)),
+             "rod": trimesh.creation.cylinder(radius=12.0, height=70.0, sections=64)}
+    for name, mesh in parts.items():
+        mesh.export(tmp_path / f"{name}.stl")  # millimetres, as CAD exports are
+    out = _here(capsys, "train", str(tmp_path), "--units", "mm", "--out", str(tmp_path / "lib.npz"), "--json")
+    assert out.returncode == 0, out.stderr
+    record = json.loads(out.stdout)
+    assert [m["model"] for m in record["models"]] == ["block", "rod"]
+    assert record["models"][0]["diameter_m"] == pytest.approx(np.linalg.norm([0.06, 0.04, 0.03]), rel=0.02)  # samples
+    assert record["models"][0]["planes"] >= 3 and record["models"][1]["cylinders"] >= 1
+    block = parts["block"].copy().apply_scale(0.001)
+    scene = workpiece_scene(np.random.default_rng(0), {"block": block.apply_translation((0, 0, 0.015))}, ["block"])
+    write_cloud(tmp_path / "scene.pcd", scene.cloud)
+    found = _here(capsys, "recognize", str(tmp_path / "lib.npz"), str(tmp_path / "scene.pcd"), "--json")
+    assert found.returncode == 0, found.stderr
+    assert [d["model"] for d in json.loads(found.stdout)["detections"]] == ["block"]
+
+
+def test_train_refuses_a_saved_library_and_an_output_that_is_no_library(tmp_path, capsys):
+    out = _here(capsys, "train", str(tmp_path / "lib.npz"), "--out", str(tmp_path / "again.npz"))
+    assert out.returncode != 0 and "is a saved library: psorr train takes meshes" in out.stderr
+    out = _here(capsys, "train", str(tmp_path), "--out", str(tmp_path / "lib.stl"))
+    assert out.returncode != 0 and "must be a .npz file name" in out.stderr
