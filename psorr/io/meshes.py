@@ -57,7 +57,7 @@ def read_mesh(path) -> trimesh.Trimesh:
         # Unprocessed first: processing drops the faces of NaN or inf vertices without a word.
         scene = load_step_scene(path) if is_step(path) else trimesh.load_scene(path, process=False)
         mesh = _one_mesh(scene)
-    except MissingExtraError:
+    except (MissingExtraError, CloudFileError):  # already named the file and the fix
         raise
     except Exception as exc:  # trimesh's many loaders raise many exception types
         raise CloudFileError(path, f"cannot be read as a mesh: {type(exc).__name__}: {exc}",
@@ -79,9 +79,10 @@ def read_mesh(path) -> trimesh.Trimesh:
     _merge_duplicate_vertices(path, mesh)
     if len(mesh.faces) == 0:
         if len(mesh.vertices) == 0:
+            fix = ("export the part's solid (or its surfaces), not only its edges or points" if is_step(path) else
+                   "export the surface as a triangle mesh in the format its suffix names")
             raise CloudFileError(path, f"holds no faces: it is points or lines only, or empty, truncated, or not a "
-                                       f"{path.suffix.lower()} file", "export the surface as a triangle mesh in the "
-                                 "format its suffix names")
+                                       f"{path.suffix.lower()} file", fix)
         raise CloudFileError(path, "the mesh has no faces",
                              "export the surface, not just its vertices")
     if not mesh.area > 0:  # every triangle degenerate: nothing to sample a surface from

@@ -77,7 +77,8 @@ def _unit_name(path: Path, entity: str) -> str:
 
 def load_step_scene(path: Path):
     """The trimesh scene OpenCASCADE tessellates a STEP file into, in metres (cascadio's default deflection:
-    0.01 mm, or 0.5 rad on radii under 0.3 mm), or a MissingExtraError naming the extra that installs it."""
+    0.01 mm, or 0.5 rad on radii under 0.3 mm); a MissingExtraError naming the extra that installs it, or a
+    CloudFileError when OpenCASCADE finds no shape in it."""
     try:
         import cascadio  # noqa: F401  (trimesh's STEP loader needs it)
     except ImportError:
@@ -85,4 +86,10 @@ def load_step_scene(path: Path):
                                 f"installed: {STEP_EXTRA} (or export the part as STL)") from None
     import trimesh
 
-    return trimesh.load_scene(path)
+    try:
+        return trimesh.load_scene(path)
+    except Exception as exc:  # noqa: BLE001  OpenCASCADE wrote no GLB: trimesh then fails to open it
+        raise CloudFileError(path, f"OpenCASCADE found no shape to tessellate in it ({type(exc).__name__}): no solid "
+                                   "or surface, or a damaged file",
+                             "re-export the part's solid as STEP, or as STL") from None
+

@@ -2,8 +2,8 @@
 user gives checked against it, and a part trained from STEP found in a scene.
 
 The fixtures in data/ are one bracket (a 60 x 40 x 5 mm base, a 30 mm wall, two 6 mm holes and a 10 mm bore)
-written by build123d 0.13 (``export_step``); bracket_in.step is the same bracket in inches, its length unit
-entity rewritten as a conversion-based INCH unit."""
+written by build123d 0.13 (``export_step``), as is edge_mm.step (a 10 mm line); bracket_in.step is the same
+bracket in inches, its length unit entity rewritten as a conversion-based INCH unit."""
 
 from __future__ import annotations
 
@@ -124,3 +124,25 @@ def test_a_part_trained_from_step_is_found():
         truth = scene.instances[0].T_camera_model
         assert [d.model for d in found] == ["bracket_in"]
         assert np.linalg.norm(found[0].T_cloud_model[:3, 3] - truth[:3, 3]) < 0.004
+
+
+def test_a_step_file_of_an_edge_only_is_refused_with_the_fix():
+    _cascadio()
+    from psorr.io.meshes import read_mesh
+
+    with pytest.raises(CloudFileError, match="edge_mm.step: holds no faces.*export the part's solid"):
+        read_mesh(DATA / "edge_mm.step")  # a 10 mm line, written by build123d
+
+
+def test_a_step_file_of_no_shape_is_refused_with_the_fix(tmp_path):
+    _cascadio()
+    from psorr.io.meshes import read_mesh
+
+    # The bracket's file cut down to its units: OpenCASCADE finds nothing to tessellate and writes no file.
+    header, data = BRACKET_MM.read_text().split("DATA;", 1)
+    units = [e for e in data.split(";") if "GLOBAL_UNIT_ASSIGNED_CONTEXT" in e or "LENGTH_UNIT" in e]
+    path = tmp_path / "units_only.step"
+    path.write_text(header + "DATA;" + ";".join(units) + ";\nENDSEC;\nEND-ISO-10303-21;\n")
+    with pytest.raises(CloudFileError, match="units_only.step: OpenCASCADE found no shape.*re-export") as caught:
+        read_mesh(path)
+    assert "converted.glb" not in str(caught.value)  # no temporary file of trimesh's named
