@@ -9,6 +9,7 @@ given in that unit, as the other formats' meshes are given in theirs.
 from __future__ import annotations
 
 import re
+from functools import lru_cache
 from pathlib import Path
 
 from psorr.errors import CloudFileError, MissingExtraError
@@ -42,6 +43,14 @@ def declared_units(path) -> str | None:
     if not is_step(path):
         return None
     require_file(path)
+    stat = path.stat()
+    return _declared_units(path, stat.st_mtime_ns, stat.st_size)
+
+
+@lru_cache(maxsize=64)
+def _declared_units(path: Path, mtime_ns: int, size: int) -> str:
+    """:func:`declared_units` of the file as it is (its time and size in the key): training asks before reading the
+    mesh and the reader again, and the whole text is searched each time."""
     text = path.read_bytes().decode("latin-1")
     found = set()
     for refs in _UNIT_CONTEXT.findall(text):
