@@ -32,9 +32,10 @@ def train_command(args) -> int:
     from psorr.library.sources import library_from_arguments
 
     out = check_output(args.out, "--out", ".npz")  # before training, not after it
-    if any(str(m).lower().endswith(".npz") for m in args.models):
-        raise CloudFileError(next(m for m in args.models if str(m).lower().endswith(".npz")),
-                             "is a saved library: psorr train takes meshes", "pass the mesh files or their folder")
+    saved = next((m for m in args.models if str(m).lower().endswith(".npz")), None)
+    if saved is not None:
+        raise CloudFileError(saved, "is a saved library: psorr train takes meshes",
+                             "pass the mesh files or their folder")
     library = library_from_arguments(args.models, units=args.units,
                                      progress=lambda xs: tqdm(xs, desc="training", file=sys.stderr))
     library.save(out)
