@@ -84,7 +84,8 @@ def stable_rests(mesh: trimesh.Trimesh) -> tuple[Rest, ...]:
     if key not in _RESTS:
         from psorr.library.derived import derived  # the disk cache: the next process reads them
 
-        _RESTS[key] = derived("rests", (mesh.vertices, mesh.faces), lambda: _found_rests(mesh), _encode, _decode)
+        # The in-process key is already the hash of the vertices and faces: not hashed again from the arrays.
+        _RESTS[key] = derived("rests", (key,), lambda: _found_rests(mesh), _encode, _decode)
     return _RESTS[key]
 
 
