@@ -27,13 +27,16 @@ class PairParams:
     """Settings of the pair stage; distances in metres.
 
     Each round clusters the pair poses by vote (on a ``cluster_cell`` position grid) and keeps the
-    ``max_hypotheses`` best-supported; those are screened by box score, with the boxes thickened to
-    ``box_thickness`` (pair poses are off by a centimetre or so), and the ``refine_top`` best scoring at
-    least ``min_box_score`` (shared out across models) go on to acceptance. After a round's detections,
-    the pairs are made again among the primitives they leave unexplained, for up to ``pair_rounds`` rounds.
+    ``max_hypotheses`` best-supported, an equal share per model of the library and never fewer than
+    ``least_per_model`` a model (the share 100 gives the 10 models it was set on); those are screened
+    by box score, with the boxes thickened to ``box_thickness`` (pair poses are off by a centimetre or
+    so), and the ``refine_top`` best scoring at least ``min_box_score`` (shared out across models) go on
+    to acceptance. After a round's detections, the pairs are made again among the primitives they leave
+    unexplained, for up to ``pair_rounds`` rounds.
     """
 
     max_hypotheses: int = 100
+    least_per_model: int = 10
     cluster_cell: float = 0.02
     min_box_score: float = 0.1
     box_thickness: float = 0.04
@@ -41,7 +44,7 @@ class PairParams:
     pair_rounds: int = 2
 
     def __post_init__(self):
-        check.whole(self, "max_hypotheses", "refine_top", "pair_rounds")
+        check.whole(self, "max_hypotheses", "least_per_model", "refine_top", "pair_rounds")
         check.positive(self, "cluster_cell", "box_thickness", unit=" metres")
         check.within(self, "min_box_score")
 
@@ -71,7 +74,7 @@ class PairCandidates:
             if len(rows):
                 poses, models = self.library.table.poses(scene_index, rows, pts[i], nrm[i], pts[j])
                 poses, models = densest_poses(poses, models, scene_index, self._model_centres, p.cluster_cell,
-                                              p.max_hypotheses)
+                                              p.max_hypotheses, p.least_per_model)
         t1 = time.perf_counter()
         scores = box_scores(self.model_primitives, poses, PrimitiveArrays.of(scene_prims), p.box_thickness, models)
         order = np.argsort(-scores, kind="stable")

@@ -39,22 +39,25 @@ def _cell_keys(models: np.ndarray, cells: np.ndarray) -> np.ndarray:
 
 
 def densest_poses(poses: np.ndarray, models: np.ndarray, voters: np.ndarray, centres: np.ndarray, cell: float,
-                  limit: int) -> tuple[np.ndarray, np.ndarray]:
-    """Up to ``limit`` poses, an equal share per model, best-supported first and one per cell.
+                  limit: int, least_per_model: int = 1) -> tuple[np.ndarray, np.ndarray]:
+    """About ``limit`` poses, an equal share per model (never fewer than ``least_per_model`` a model),
+    best-supported first and one per cell.
 
     poses (K, 4, 4) T_cloud_model; models (K,) indices into centres (M, 3), each model's centre in
     its own frame; voters (K,) int, the scene pair each pose came from (a cell's support is the
     number of distinct scene pairs in it); cell in metres. An equal share, because a model with many primitives collects
     more chance votes, and a single ranking would crowd the others out. A pose is taken only if
-    neither of its cells gave a pose already, so each cluster yields one hypothesis.
+    neither of its cells gave a pose already, so each cluster yields one hypothesis. The floor keeps a
+    model's share from shrinking as the library grows: 100 over a 39-part library left each model its 2
+    best clusters, and a part whose true cluster ranked third was never posed.
     Returns the chosen poses and their models.
     """
-    best = densest(poses, models, voters, centres, cell, limit)
+    best = densest(poses, models, voters, centres, cell, limit, least_per_model)
     return poses[best], models[best]
 
 
 def densest(poses: np.ndarray, models: np.ndarray, voters: np.ndarray, centres: np.ndarray, cell: float,
-            limit: int) -> np.ndarray:
+            limit: int, least_per_model: int = 1) -> np.ndarray:
     """The indices (into poses (K, 4, 4)) that densest_poses chooses."""
     if len(poses) == 0:
         return np.zeros(0, dtype=np.int64)
@@ -71,7 +74,7 @@ def densest(poses: np.ndarray, models: np.ndarray, voters: np.ndarray, centres: 
         cells.append(cell_of)
         votes.append(count[cell_of])
     score = np.maximum(*votes)
-    quota = max(1, limit // len(centres))
+    quota = max(1, least_per_model, limit // len(centres))
     chosen = []
     for model in np.unique(models):
         mine = np.flatnonzero(models == model)

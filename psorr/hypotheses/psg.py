@@ -38,8 +38,9 @@ _CONFLICT = 2.0  # more than any reward a node can earn (box scores are at most 
 class PsgParams:
     """``angle_tolerance`` (degrees) between a scene clique's normal-to-normal (or normal-to-axis)
     angles and a model clique's; the radius as in pair matching. The ``max_hypotheses`` poses that most
-    scene cliques agree on (PSORR's vote, on a ``same_place`` grid) are box-scored; those scoring at least
-    ``min_box_score`` (with boxes thickened to ``box_thickness`` metres) take part in QPBO; of those it
+    scene cliques agree on (PSORR's vote, on a ``same_place`` grid; at least ``least_per_model`` a model)
+    are box-scored; those scoring at least ``min_box_score`` (with boxes thickened to ``box_thickness``
+    metres) take part in QPBO; of those it
     keeps, one of each group within ``same_place`` metres (PSORR's vote cell) and the angle tolerance,
     the ``top`` shared out across models, go on to acceptance. With ``pairs_after``, the primitives the
     cliques' detections leave unexplained are paired as PSORR pairs them: a part that shows no clique of
@@ -55,12 +56,13 @@ class PsgParams:
     box_thickness: float = _PAIRS.box_thickness
     same_place: float = _PAIRS.cluster_cell
     max_hypotheses: int = _PAIRS.max_hypotheses
+    least_per_model: int = _PAIRS.least_per_model
     top: int = _PAIRS.refine_top
 
     def __post_init__(self):
         check.positive(self, "angle_tolerance", "box_thickness", "same_place")
         check.within(self, "min_box_score")
-        check.whole(self, "top", "max_hypotheses", "auto_primitives")
+        check.whole(self, "top", "max_hypotheses", "least_per_model", "auto_primitives")
         check.flag(self, "pairs_after")
 
 
@@ -112,7 +114,7 @@ class PsgMatcher:
         # As PSORR's pair votes: the poses most scene cliques agree on, an equal share per model.
         voters = _voters(found.nodes)
         pick = densest(found.poses, found.models, voters, self.model_centres, self.params.same_place,
-                       self.params.max_hypotheses)
+                       self.params.max_hypotheses, self.params.least_per_model)
         scores = np.zeros(len(found.poses))
         if len(pick):
             scores[pick] = box_scores(self.model_primitives, found.poses[pick], PrimitiveArrays.of(prims),
