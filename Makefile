@@ -60,6 +60,7 @@ bench: setup $(BENCH_STAMP)
 	$(BIN)/python benchmarks/peers.py
 	$(BIN)/python benchmarks/psg.py
 	$(BIN)/python benchmarks/generalization.py
+	$(BIN)/python benchmarks/library_size.py
 	$(BIN)/python benchmarks/sensors.py
 	$(BIN)/python benchmarks/density.py
 	$(BIN)/python benchmarks/grasp_tolerance.py

@@ -1,5 +1,6 @@
 """The generalization benchmark's tables, from ``benchmarks/results/generalization.json`` by the benchmark's
-own report code (benchmarks/generalization_report.py), so that the site and the script print the same."""
+own report code (benchmarks/generalization_report.py), so that the site and the script print the same; and the
+library-size benchmark's (``library_size.json``, benchmarks/library_size_report.py)."""
 
 from __future__ import annotations
 
@@ -20,7 +21,8 @@ TABLES = {"generalization-scenes": _rendered("scenes_lines"), "generalization": 
           "generalization-targets": _rendered("targets_table"),
           "generalization-times": _rendered("times_table"), "generalization-sizes": _rendered("sizes_table"),
           "generalization-classes": _rendered("classes_table"), "generalization-parts": _rendered("parts_table"),
-          "generalization-shapes": _rendered("shapes_table")}
+          "generalization-shapes": _rendered("shapes_table"),
+          "library-size": lambda: benchmark_module("library_size_report").table(load("library_size"))}
 
 
 def headline_row(base: str = "") -> list[str]:
