@@ -47,12 +47,14 @@ def _arguments(argv):
     return parser.parse_args(argv)
 
 
-def libraries(meshes: dict) -> tuple[list[str], list[list[str]]]:
+def libraries(meshes: dict, folder: Path | str = "the folder") -> tuple[list[str], list[list[str]]]:
     """(the parts the scenes show, the libraries' part names, smallest first)."""
     halves = gp.folder_split(meshes)
     dev = sorted(halves["dev"])
     if len(dev) <= SHOWN:
-        raise gp.SplitError(f"the dev half holds {len(dev)} parts; this benchmark needs more than {SHOWN}")
+        raise gp.SplitError(f"{folder}: the dev half holds {len(dev)} of its {len(meshes)} parts; this benchmark "
+                            f"shows {SHOWN} and adds more, so it needs at least {2 * SHOWN + 1} parts of at least "
+                            f"{gp.MIN_LENGTH * 1e3:g} mm (benchmarks/generalization.py --split all takes fewer)")
     shown = dev[:SHOWN]
     return shown, [shown, dev, sorted(meshes)]
 
@@ -68,7 +70,7 @@ def run(meshes: dict, paths: dict, units: str, args) -> dict:
     from psorr.library.models import ModelLibrary
     from psorr.recognize import Recognizer
 
-    shown, named = libraries(meshes)
+    shown, named = libraries(meshes, args.cad or DEFAULT_CAD)
     parts = {n: meshes[n] for n in shown}
     infos = {n: gp.part_info(n, parts[n]) for n in shown}
     recognizers = [Recognizer(ModelLibrary.from_meshes([paths[n] for n in names], units=units), "psorr")

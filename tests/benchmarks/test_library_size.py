@@ -24,7 +24,7 @@ def test_the_libraries_grow_from_the_shown_parts_to_every_part():
 
 
 def test_a_folder_too_small_for_ten_shown_parts_is_refused():
-    with pytest.raises(parts.SplitError, match="dev half holds 5 parts"):
+    with pytest.raises(parts.SplitError, match="the dev half holds 5 of its 10 parts"):
         library_size.libraries({f"part-{k}": None for k in range(10)})
 
 
