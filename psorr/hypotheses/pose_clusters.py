@@ -48,8 +48,8 @@ def densest_poses(poses: np.ndarray, models: np.ndarray, voters: np.ndarray, cen
     number of distinct scene pairs in it); cell in metres. An equal share, because a model with many primitives collects
     more chance votes, and a single ranking would crowd the others out. A pose is taken only if
     neither of its cells gave a pose already, so each cluster yields one hypothesis. The floor keeps a
-    model's share from shrinking as the library grows: 100 over a 39-part library left each model its 2
-    best clusters, and a part whose true cluster ranked third was never posed.
+    model's share from shrinking as the library grows: a part whose true cluster ranks third by votes
+    must still be posed in a library of 40 (docs/decisions/0015).
     Returns the chosen poses and their models.
     """
     best = densest(poses, models, voters, centres, cell, limit, least_per_model)

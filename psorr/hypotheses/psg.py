@@ -40,13 +40,13 @@ class PsgParams:
     angles and a model clique's; the radius as in pair matching. The ``max_hypotheses`` poses that most
     scene cliques agree on (PSORR's vote, on a ``same_place`` grid; at least ``least_per_model`` a model)
     are box-scored; those scoring at least ``min_box_score`` (with boxes thickened to ``box_thickness``
-    metres) take part in QPBO; of those it
-    keeps, one of each group within ``same_place`` metres (PSORR's vote cell) and the angle tolerance,
-    the ``top`` shared out across models, go on to acceptance. With ``pairs_after``, the primitives the
-    cliques' detections leave unexplained are paired as PSORR pairs them: a part that shows no clique of
-    its model (a board showing its top and one side) is still found (docs/decisions/0069). ``method="auto"``
-    matches the cliques of the models of at least ``auto_primitives`` primitives (planes and cylinders), where
-    PSG is the faster method, and pairs every model's (docs/decisions/0072)."""
+    metres) take part in QPBO; of those it keeps, one of each group within ``same_place`` metres (PSORR's
+    vote cell) and the angle tolerance, the ``top`` shared out across models, go on to acceptance. With
+    ``pairs_after``, the primitives the cliques' detections leave unexplained are paired as PSORR pairs
+    them: a part that shows no clique of its model (a board showing its top and one side) is still found
+    (docs/decisions/0069). ``method="auto"`` matches the cliques of the models of at least
+    ``auto_primitives`` primitives (planes and cylinders), where PSG is the faster method, and pairs every
+    model's (docs/decisions/0072)."""
 
     angle_tolerance: float = 10.0
     pairs_after: bool = True
