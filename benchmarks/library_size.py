@@ -26,7 +26,7 @@ import _single_core  # noqa: F401  (must precede numpy)
 import generalization_parts as gp
 import numpy as np
 from generalization import DEFAULT_CAD, SPLIT_SEED
-from library_size_report import plot, table
+from library_size_report import false_table, plot, table
 from tqdm import tqdm
 
 from psorr.io.meshes import MESH_SUFFIXES, UNITS
@@ -75,7 +75,8 @@ def run(meshes: dict, paths: dict, units: str, args) -> dict:
     infos = {n: gp.part_info(n, parts[n]) for n in shown}
     recognizers = [Recognizer(ModelLibrary.from_meshes([paths[n] for n in names], units=units), "psorr")
                    for names in tqdm(named, desc="training", file=sys.stderr)]
-    rows = [{"models": len(names), "found": [], "counted": [], "false": [], "ms": []} for names in named]
+    rows = [{"models": len(names), "found": [], "counted": [], "false": [], "false_models": [], "ms": []}
+            for names in named]
     kinds, start = [], time.perf_counter()
     for kind, names, seed in tqdm(_plan(shown, args), desc="scenes, every library", file=sys.stderr):
         scene = mesh_scene(np.random.default_rng(seed), parts, kind, names=names, distractors=simple_shapes())
@@ -89,6 +90,7 @@ def run(meshes: dict, paths: dict, units: str, args) -> dict:
             row["found"].append(sum(f and c for f, c in zip(found, counted)))
             row["counted"].append(sum(counted))
             row["false"].append(correct.count(False))
+            row["false_models"].append([d.model for d, ok in zip(detections, correct) if not ok])
     return {"shown": shown, "libraries": named, "kinds": kinds, "rows": rows,
             "conditions": f"run {time.strftime('%Y-%m-%d')} in {(time.perf_counter() - start) / 60:.0f} min, one core"}
 
@@ -103,7 +105,8 @@ def main(argv=None) -> int:
     meshes, _ = gp.checked_split(load_meshes(cad, args.units), cad)
     stem = "library_size" if gp.is_prusa(meshes) else f"library_size-{cad.resolve().name}"
     data = run(meshes, paths, args.units, args)
-    text = f"{table(data)}\n\nScenes of {', '.join(data['shown'])}; {data['conditions']}.\n"
+    text = (f"{table(data)}\n\nFalse detections by model:\n\n{false_table(data)}\n\n"
+            f"Scenes of {', '.join(data['shown'])}; {data['conditions']}.\n")
     print(text)
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / f"{stem}.md").write_text(text)

@@ -3,6 +3,7 @@ that the docs' hook renders the table without pinning mkdocs to one core."""
 
 from __future__ import annotations
 
+from collections import Counter
 from pathlib import Path
 
 import numpy as np
@@ -31,6 +32,17 @@ def table(data: dict) -> str:
         (lf, ln), (mf, mn) = s["lone"], s["multi"]
         lines.append(f"| {s['models']} | {lf}/{ln} = {lf / ln:.2f} | {mf}/{mn} = {mf / mn:.2f} | "
                      f"{s['false_per_scene']:.2f} | {s['median_ms']:.0f} | {s['mean_ms']:.0f} |")
+    return "\n".join(lines)
+
+
+def false_table(data: dict) -> str:
+    """Per model, its false detections over all scenes with each library (the docs' hook renders this one)."""
+    rows = data["rows"]
+    counts = [Counter(model for scene in row["false_models"] for model in scene) for row in rows]
+    models = sorted(set().union(*counts), key=lambda m: (-counts[-1][m], m))
+    lines = ["| model | " + " | ".join(f"{row['models']} models" for row in rows) + " |",
+             "|---|" + "---:|" * len(rows)]
+    lines += [f"| {m} | " + " | ".join(str(c[m]) for c in counts) + " |" for m in models]
     return "\n".join(lines)
 
 

@@ -22,7 +22,8 @@ TABLES = {"generalization-scenes": _rendered("scenes_lines"), "generalization": 
           "generalization-times": _rendered("times_table"), "generalization-sizes": _rendered("sizes_table"),
           "generalization-classes": _rendered("classes_table"), "generalization-parts": _rendered("parts_table"),
           "generalization-shapes": _rendered("shapes_table"),
-          "library-size": lambda: benchmark_module("library_size_report").table(load("library_size"))}
+          "library-size": lambda: benchmark_module("library_size_report").table(load("library_size")),
+          "library-size-false": lambda: benchmark_module("library_size_report").false_table(load("library_size"))}
 
 
 def headline_row(base: str = "") -> list[str]:

@@ -43,3 +43,11 @@ def test_the_report_names_lone_scenes_as_the_results_file_does():
     from psorr.synthetic.mesh_scenes import SceneKind
 
     assert library_size_report.SINGLE == str(SceneKind.SINGLE)
+
+
+def test_false_detections_are_counted_per_model_and_library():
+    data = {"rows": [{"models": 10, "false_models": [["knob"], []]},
+                     {"models": 39, "false_models": [["knob", "idler"], ["idler"]]}]}
+    table = library_size_report.false_table(data)
+    assert table.splitlines()[0] == "| model | 10 models | 39 models |"
+    assert table.splitlines()[2:] == ["| idler | 0 | 2 |", "| knob | 1 | 1 |"]
