@@ -26,6 +26,18 @@ TABLES = {"generalization-scenes": _rendered("scenes_lines"), "generalization": 
           "library-size-false": lambda: benchmark_module("library_size_report").false_table(load("library_size"))}
 
 
+def library_size_row(base: str = "") -> list[str]:
+    """The README's line of the library-size benchmark: per library size, what the same scenes give."""
+    rows = benchmark_module("library_size_report").summary(load("library_size"))
+
+    def each(value, form: str) -> str:
+        return " / ".join(format(value(r), form) for r in rows)
+    return [f"[Larger libraries, the same scenes]({base}library-size.md)",
+            f"{each(lambda r: r['models'], 'd')} models: clutter and occlusion "
+            f"{each(lambda r: r['multi'][0] / r['multi'][1], '.2f')}, false "
+            f"{each(lambda r: r['false_per_scene'], '.2f')} a scene, median {each(lambda r: r['median_ms'], '.0f')} ms"]
+
+
 def headline_row(base: str = "") -> list[str]:
     """The README's line: PSORR's recall and false detections on each half, against the issue's targets, and
     with its outline hypotheses on when the results hold that row."""

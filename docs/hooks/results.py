@@ -50,6 +50,7 @@ def headline(base: str = "") -> str:
          f"{share:.3f} of Open3D FPFH's time"],
         [f"[The paper's Table 1]({base}table1.md)", recognition.table1_headline()],
         generalization.headline_row(base),
+        generalization.library_size_row(base),
         [f"[Other sensors, {sen['clutter_scenes']} clutter scenes]({base}sensors.md)",
          recognition.sensors_headline(sen["rows"])],
         [f"[Real clouds without our parts]({base}osd-false-positives.md)",
