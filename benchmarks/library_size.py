@@ -65,15 +65,16 @@ def _plan(shown: list[str], args) -> list[tuple[SceneKind, list | None, list[int
     return plan + [(SceneKind.OCCLUDED, None, [SEED, 2, k]) for k in range(args.occluded)]
 
 
-def run(meshes: dict, paths: dict, units: str, args) -> dict:
-    """The results (JSON): per library its size and per scene the instances found, false detections and ms."""
+def run(meshes: dict, paths: dict, args) -> dict:
+    """The results (JSON): per library its size and per scene the instances found, false detections and ms, for
+    the meshes of folder ``args.cad`` in ``args.units``."""
     from psorr.library.models import ModelLibrary
     from psorr.recognize import Recognizer
 
-    shown, named = libraries(meshes, args.cad or DEFAULT_CAD)
+    shown, named = libraries(meshes, args.cad)
     parts = {n: meshes[n] for n in shown}
     infos = {n: gp.part_info(n, parts[n]) for n in shown}
-    recognizers = [Recognizer(ModelLibrary.from_meshes([paths[n] for n in names], units=units), "psorr")
+    recognizers = [Recognizer(ModelLibrary.from_meshes([paths[n] for n in names], units=args.units), "psorr")
                    for names in tqdm(named, desc="training", file=sys.stderr)]
     rows = [{"models": len(names), "found": [], "counted": [], "false": [], "false_models": [], "ms": []}
             for names in named]
@@ -100,11 +101,11 @@ def main(argv=None) -> int:
     if args.cad is None and not DEFAULT_CAD.is_dir():
         print(f"no parts under {DEFAULT_CAD}: nothing to benchmark (pass --cad DIR)", file=sys.stderr)
         return 0
-    cad = args.cad or DEFAULT_CAD
+    cad = args.cad = args.cad or DEFAULT_CAD
     paths = {p.stem: p for p in sorted(cad.iterdir()) if p.suffix.lower() in MESH_SUFFIXES}
     meshes, _ = gp.checked_split(load_meshes(cad, args.units), cad)
     stem = "library_size" if gp.is_prusa(meshes) else f"library_size-{cad.resolve().name}"
-    data = run(meshes, paths, args.units, args)
+    data = run(meshes, paths, args)
     text = (f"{table(data)}\n\nFalse detections by model:\n\n{false_table(data)}\n\n"
             f"Scenes of {', '.join(data['shown'])}; {data['conditions']}.\n")
     print(text)

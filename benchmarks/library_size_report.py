@@ -11,6 +11,12 @@ import numpy as np
 SINGLE = "single"  # str(psorr.synthetic.mesh_scenes.SceneKind.SINGLE), as the results file holds it
 
 
+def recall(found_counted: tuple[int, int]) -> float:
+    """found / counted, NaN when the run counted none (a run of lone scenes only has no clutter)."""
+    found, counted = found_counted
+    return found / counted if counted else float("nan")
+
+
 def summary(data: dict) -> list[dict]:
     """Per library: its size, lone and clutter-and-occluded (found, counted), false detections a scene, ms."""
     lone = np.array([k == SINGLE for k in data["kinds"]])
@@ -30,7 +36,7 @@ def table(data: dict) -> str:
              "| mean ms |", "|---:|---:|---:|---:|---:|---:|"]
     for s in summary(data):
         (lf, ln), (mf, mn) = s["lone"], s["multi"]
-        lines.append(f"| {s['models']} | {lf}/{ln} = {lf / ln:.2f} | {mf}/{mn} = {mf / mn:.2f} | "
+        lines.append(f"| {s['models']} | {lf}/{ln} = {recall(s['lone']):.2f} | {mf}/{mn} = {recall(s['multi']):.2f} | "
                      f"{s['false_per_scene']:.2f} | {s['median_ms']:.0f} | {s['mean_ms']:.0f} |")
     return "\n".join(lines)
 
@@ -54,12 +60,12 @@ def plot(data: dict, path: Path) -> None:
 
     rows = summary(data)
     models = [r["models"] for r in rows]
-    fig, (recall, times) = plt.subplots(1, 2, figsize=(10, 3.8))
-    recall.plot(models, [r["lone"][0] / r["lone"][1] for r in rows], "o-", label="lone")
-    recall.plot(models, [r["multi"][0] / r["multi"][1] for r in rows], "s-", label="clutter and occluded")
-    recall.plot(models, [r["false_per_scene"] for r in rows], "^--", label="false detections a scene")
-    recall.set(xlabel="models in the library", ylim=(0, 1.05), title="the same scenes, larger libraries")
-    recall.legend(loc="lower left")
+    fig, (shares, times) = plt.subplots(1, 2, figsize=(10, 3.8))
+    shares.plot(models, [recall(r["lone"]) for r in rows], "o-", label="lone")
+    shares.plot(models, [recall(r["multi"]) for r in rows], "s-", label="clutter and occluded")
+    shares.plot(models, [r["false_per_scene"] for r in rows], "^--", label="false detections a scene")
+    shares.set(xlabel="models in the library", ylim=(0, 1.05), title="the same scenes, larger libraries")
+    shares.legend(loc="lower left")
     times.plot(models, [r["median_ms"] for r in rows], "o-", label="median")
     times.plot(models, [r["mean_ms"] for r in rows], "s-", label="mean")
     times.set(xlabel="models in the library", ylabel="ms a scene, one core", ylim=(0, None), title="time")

@@ -28,13 +28,14 @@ TABLES = {"generalization-scenes": _rendered("scenes_lines"), "generalization": 
 
 def library_size_row(base: str = "") -> list[str]:
     """The README's line of the library-size benchmark: per library size, what the same scenes give."""
-    rows = benchmark_module("library_size_report").summary(load("library_size"))
+    report = benchmark_module("library_size_report")
+    rows = report.summary(load("library_size"))
 
     def each(value, form: str) -> str:
         return " / ".join(format(value(r), form) for r in rows)
     return [f"[Larger libraries, the same scenes]({base}library-size.md)",
             f"{each(lambda r: r['models'], 'd')} models: clutter and occlusion "
-            f"{each(lambda r: r['multi'][0] / r['multi'][1], '.2f')}, false "
+            f"{each(lambda r: report.recall(r['multi']), '.2f')}, false "
             f"{each(lambda r: r['false_per_scene'], '.2f')} a scene, median {each(lambda r: r['median_ms'], '.0f')} ms"]
 
 

@@ -51,3 +51,8 @@ def test_false_detections_are_counted_per_model_and_library():
     table = library_size_report.false_table(data)
     assert table.splitlines()[0] == "| model | 10 models | 39 models |"
     assert table.splitlines()[2:] == ["| idler | 0 | 2 |", "| knob | 1 | 1 |"]
+
+
+def test_a_run_of_lone_scenes_only_reports_no_clutter_recall_rather_than_failing():
+    data = {"kinds": ["single"], "rows": [{"models": 10, "found": [1], "counted": [1], "false": [0], "ms": [90.0]}]}
+    assert "| 10 | 1/1 = 1.00 | 0/0 = nan |" in library_size_report.table(data)
