@@ -117,8 +117,8 @@ def run(seeds: int, repeats: int) -> list[dict]:
     with tqdm(total=len(meshes) * seeds, desc="scenes", file=sys.stderr) as bar:
         for name in meshes:
             graph = library.model(name).graph
-            row = {"model": name, "planes": sum(p.kind is PrimitiveKind.PLANE for p in graph.primitives),
-                   "cylinders": sum(p.kind is PrimitiveKind.CYLINDER for p in graph.primitives),
+            row = {"model": name, "planes": graph.count(PrimitiveKind.PLANE),
+                   "cylinders": graph.count(PrimitiveKind.CYLINDER),
                    "auto_cliques": name in auto_cliques}
             for method in METHODS:
                 row[method] = {"found": 0, "false": 0, "ms": [], "searched": []}

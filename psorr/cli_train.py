@@ -51,6 +51,6 @@ def train_command(args) -> int:
 
 
 def _row(model) -> dict:
-    kinds = [p.kind for p in model.graph.primitives]
+    graph = model.graph
     return {"model": model.name, "diameter_m": float(model.diameter),
-            "planes": kinds.count(PrimitiveKind.PLANE), "cylinders": kinds.count(PrimitiveKind.CYLINDER)}
+            "planes": graph.count(PrimitiveKind.PLANE), "cylinders": graph.count(PrimitiveKind.CYLINDER)}

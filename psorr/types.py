@@ -230,6 +230,10 @@ class PrimitiveShapeGraph:
     def neighbours(self, index: int) -> list[int]:
         return sorted({j for i, j in self.edges if i == index} | {i for i, j in self.edges if j == index})
 
+    def count(self, kind: PrimitiveKind) -> int:
+        """How many of the primitives are of ``kind`` (planes, say)."""
+        return sum(p.kind is kind for p in self.primitives)
+
 
 @dataclass(frozen=True, eq=False)
 class Detection:

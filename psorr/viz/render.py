@@ -91,7 +91,7 @@ def save_decomposition_png(path, cloud: PointCloud, labels: np.ndarray, graph: P
         mark = "s" if prim.kind is PrimitiveKind.PLANE else "o"
         ax.plot(*centres[i], mark, color="white", markeredgecolor="black", markersize=7)
         ax.annotate(str(i), centres[i], fontsize=7, ha="center", va="center")
-    n_planes = sum(p.kind is PrimitiveKind.PLANE for p in graph.primitives)
+    n_planes = graph.count(PrimitiveKind.PLANE)
     ax.set_title(title or f"{n_planes} planes (blue-green), {len(graph) - n_planes} cylinders (red), "
                  f"{len(graph.edges)} graph edges", fontsize=9)
     ax.set_axis_off()

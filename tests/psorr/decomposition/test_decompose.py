@@ -110,6 +110,7 @@ def test_empty_table_is_one_plane():
     result = decompose(scene.cloud)
     assert [p.kind for p in result.primitives] == [PrimitiveKind.PLANE]
     assert result.graph.edges == ()
+    assert (result.graph.count(PrimitiveKind.PLANE), result.graph.count(PrimitiveKind.CYLINDER)) == (1, 0)
 
 
 def test_labels_line_up_with_input_and_nan_points_get_minus_one():
@@ -156,6 +157,7 @@ def test_cad_like_cloud_without_sensor_noise_model():
     planes = [p for p in result.primitives if p.kind is PrimitiveKind.PLANE and p.n_points > 500]
     assert len(planes) == 6
     assert len(result.graph.edges) >= 12  # each face touches four others
+    assert result.graph.count(PrimitiveKind.PLANE) + result.graph.count(PrimitiveKind.CYLINDER) == len(result.graph)
 
 
 def test_bad_inputs_raise_clear_errors():
