@@ -115,11 +115,9 @@ def _methods(chosen: list[str], library, meshes: dict) -> dict:
 
 def _scene_plan(names: list[str], split: str, args) -> list[tuple[SceneKind, list | None, list[int]]]:
     """(kind, the parts to show or None to draw them, seed) of every scene of the half."""
-    singles, clutter, occluded = (1, 1, 1) if args.quick else (args.singles, args.clutter, args.occluded)
-    shown = names[:4] if args.quick else names
-    plan = [(SceneKind.SINGLE, [n], [SPLIT_SEED[split], 0, names.index(n), s]) for n in shown for s in range(singles)]
-    plan += [(SceneKind.CLUTTER, None, [SPLIT_SEED[split], 1, k]) for k in range(clutter)]
-    return plan + [(SceneKind.OCCLUDED, None, [SPLIT_SEED[split], 2, k]) for k in range(occluded)]
+    if args.quick:  # the first four parts alone, one clutter and one occluded scene
+        return gp.scene_plan(SPLIT_SEED[split], names[:4], 1, 1, 1)
+    return gp.scene_plan(SPLIT_SEED[split], names, args.singles, args.clutter, args.occluded)
 
 
 def _half(split: str, meshes: dict) -> tuple[list[str], dict, dict]:

@@ -26,7 +26,7 @@ import trimesh
 
 from psorr.geometry.rotations import turn_about_line
 from psorr.synthetic.catalog import model_diameter
-from psorr.synthetic.mesh_scenes import MeshScene
+from psorr.synthetic.mesh_scenes import MeshScene, SceneKind
 from psorr.synthetic.mesh_symmetry import MeshSymmetry, find_symmetries, match_detections, mesh_symmetric_add
 from psorr.synthetic.part_shapes import PartShape, part_shape
 
@@ -177,3 +177,12 @@ def grade_instances(instances, detections, infos: dict[str, PartInfo]) -> tuple[
         info = infos.get(name)
         return None if info is None else (info.samples, info.symmetry, info.diameter)
     return match_detections(instances, detections, known, ADD_SHARE)
+
+
+def scene_plan(seed: int, shown: list[str], singles: int, clutter: int,
+               occluded: int) -> list[tuple[SceneKind, list | None, list[int]]]:
+    """(kind, the parts to show or None to draw them, seed) of every scene: ``singles`` of each part of ``shown``
+    alone (seeded by its place in ``shown``), then the clutter and occluded scenes, all seeded under ``seed``."""
+    plan = [(SceneKind.SINGLE, [n], [seed, 0, k, s]) for k, n in enumerate(shown) for s in range(singles)]
+    plan += [(SceneKind.CLUTTER, None, [seed, 1, k]) for k in range(clutter)]
+    return plan + [(SceneKind.OCCLUDED, None, [seed, 2, k]) for k in range(occluded)]

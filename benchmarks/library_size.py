@@ -59,12 +59,6 @@ def libraries(meshes: dict, folder: Path | str = "the folder") -> tuple[list[str
     return shown, [shown, dev, sorted(meshes)]
 
 
-def _plan(shown: list[str], args) -> list[tuple[SceneKind, list | None, list[int]]]:
-    plan = [(SceneKind.SINGLE, [n], [SEED, 0, k, s]) for k, n in enumerate(shown) for s in range(args.singles)]
-    plan += [(SceneKind.CLUTTER, None, [SEED, 1, k]) for k in range(args.clutter)]
-    return plan + [(SceneKind.OCCLUDED, None, [SEED, 2, k]) for k in range(args.occluded)]
-
-
 def run(meshes: dict, paths: dict, args) -> dict:
     """The results (JSON): per library its size and per scene the instances found, false detections and ms, for
     the meshes of folder ``args.cad`` in ``args.units``."""
@@ -79,7 +73,8 @@ def run(meshes: dict, paths: dict, args) -> dict:
     rows = [{"models": len(names), "found": [], "counted": [], "false": [], "false_models": [], "ms": []}
             for names in named]
     kinds, start = [], time.perf_counter()
-    for kind, names, seed in tqdm(_plan(shown, args), desc="scenes, every library", file=sys.stderr):
+    plan = gp.scene_plan(SEED, shown, args.singles, args.clutter, args.occluded)
+    for kind, names, seed in tqdm(plan, desc="scenes, every library", file=sys.stderr):
         scene = mesh_scene(np.random.default_rng(seed), parts, kind, names=names, distractors=simple_shapes())
         kinds.append(str(kind))
         counted = [kind == SceneKind.SINGLE or v >= 0.3 for v in scene.visibility]
