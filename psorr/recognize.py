@@ -82,7 +82,7 @@ class Recognizer:
         # primitives) give up above twice the acceptance bar; from ORR, a bushing seen through by half converged.
         coarse_limit = 1.0 if self.method is Method.ORR else 2 * p.acceptance.max_violation_ratio
         self.acceptance = Acceptance(library, p.acceptance, coarse_limit)
-        self.detected = DetectedSurfaces(library.models, p.acceptance.icp_distance / 2, p.support_crop.off_plane,
+        self.detected = DetectedSurfaces(library.models, p.acceptance.icp_distance / 2, p.support_crop,
                                          _TABLE_EXTENT * self.max_diameter, p.detail.min_unexplained)
         self.pairs = PairCandidates(library, p.pairs)
         self.single_plane = SinglePlaneMatcher(library.models, p.single_plane)

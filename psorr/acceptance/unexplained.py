@@ -14,20 +14,20 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from psorr.decomposition.support_crop import along_plane
+from psorr.decomposition.support_crop import SupportCropParams, along_plane, standing_points
 from psorr.types import PointCloud
 
 
 class DetectedSurfaces:
     """The library's models' surface samples (``models``: those of a ModelLibrary), for asking which points
     the detections so far explain: those within ``reach`` metres of a detected model's samples at its pose.
-    A point stands when it is more than ``off_plane`` metres above the supporting plane; a group of standing
-    points wider or higher than ``largest`` metres is no part, and fewer than ``min_points`` left standing
-    are none."""
+    A point stands on the supporting plane as the support crop's ``standing`` params say
+    (:func:`~psorr.decomposition.support_crop.standing_bar`); a group of standing points wider or higher than
+    ``largest`` metres is no part, and fewer than ``min_points`` left standing are none."""
 
-    def __init__(self, models, reach: float, off_plane: float, largest: float, min_points: int):
+    def __init__(self, models, reach: float, standing: SupportCropParams, largest: float, min_points: int):
         self.trees = {m.name: cKDTree(m.points) for m in models}
-        self.reach, self.off_plane, self.largest, self.min_points = reach, off_plane, largest, min_points
+        self.reach, self.standing, self.largest, self.min_points = reach, standing, largest, min_points
 
     def explain(self, detections, points: np.ndarray, share: float = 0.5) -> bool:
         """Does at least ``share`` of ``points`` (M, 3), a primitive's, lie on the surface of one of
@@ -41,7 +41,7 @@ class DetectedSurfaces:
         them, or where they form groups too large to be one part (:func:`part_sized`); None when too few stand
         unexplained. What stands is the same in a cloud as in its crop (the crop keeps every standing point),
         so the answer is too."""
-        standing = standing_points(cloud, plane, self.off_plane)
+        standing = standing_points(cloud, plane, self.standing)
         rest = standing_unexplained(cloud, standing, detections, self.trees, self.reach)
         rest = part_sized(cloud, plane, rest, self.largest)
         if rest.sum() < self.min_points:
@@ -56,17 +56,6 @@ def on_detected_surface(points: np.ndarray, detection, model_trees: dict, reach:
     local = points @ T_model_cloud[:3, :3].T + T_model_cloud[:3, 3]
     gap, _ = model_trees[detection.model].query(local, distance_upper_bound=reach)
     return np.isfinite(gap)
-
-
-def standing_points(cloud: PointCloud, plane: np.ndarray | None, off_plane: float) -> np.ndarray:
-    """(N,) bool over ``cloud``'s points: finite, and more than ``off_plane`` metres above the supporting
-    ``plane`` (a, b, c, d; the sensor on its positive side); every finite point when there is no plane."""
-    points = cloud.points
-    finite = cloud.valid_mask
-    standing = finite.copy()
-    if plane is not None:
-        standing[finite] = points[finite] @ np.asarray(plane[:3]) + plane[3] > off_plane
-    return standing
 
 
 def standing_unexplained(cloud: PointCloud, standing: np.ndarray, detections, model_trees: dict,

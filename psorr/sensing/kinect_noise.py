@@ -86,6 +86,16 @@ class KinectNoise:
         quantisation (uniform over a step, so step^2 / 12) added in quadrature."""
         return np.sqrt(self.axial_sigma(z) ** 2 + self.quantisation_step(z, fx) ** 2 / 12.0)
 
+    def height_sigma(self, points, normal, fx: float = 525.0) -> np.ndarray:
+        """(N,) standard deviation (metres) of the measured height over a plane of unit ``normal`` (3,) of points
+        (N, 3) that lie on it: the depth noise along each point's ray projected on the normal, and the lateral
+        jitter, which on a plane seen obliquely reads the depth of a neighbouring pixel's ray."""
+        points, normal = np.asarray(points, dtype=np.float64), np.asarray(normal, dtype=np.float64)
+        z = points[:, 2]
+        axial = self.depth_sigma(z, fx) * np.abs(points @ normal) / z
+        lateral = self.lateral_sigma_px * z / fx * np.hypot(normal[0], normal[1])
+        return np.hypot(axial, lateral)
+
     def quantisation_step(self, z, fx: float = 525.0) -> np.ndarray:
         """Depth step (metres) between neighbouring disparity levels at depth z."""
         z = np.asarray(z, dtype=np.float64)

@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from psorr.acceptance.unexplained import blanked, part_sized, standing_points, standing_unexplained
+from psorr.acceptance.unexplained import blanked, part_sized, standing_unexplained
+from psorr.decomposition.support_crop import SupportCropParams, standing_points
 from psorr.library.models import ModelLibrary
 from psorr.recognize import Recognizer
 from psorr.synthetic.catalog import load_catalog, symmetric_add
@@ -13,6 +14,7 @@ from psorr.types import Detection, PointCloud
 from psorr.verification.scene_view import SceneView
 
 OFF_PLANE, REACH = 0.008, 0.006
+STANDING = SupportCropParams(off_plane=OFF_PLANE, sensor_noise=False)  # one bar, so the tests can name it
 
 
 @pytest.fixture(scope="module")
@@ -36,7 +38,7 @@ def test_a_detected_part_leaves_nothing_and_an_undetected_one_all_it_shows(parts
     plane = SceneView(scene.cloud).support_plane
     bushing, chassis = scene.instances
     found = [Detection("chassis", chassis.T_camera_model, 0.9)]
-    standing = standing_points(scene.cloud, plane, OFF_PLANE)
+    standing = standing_points(scene.cloud, plane, STANDING)
     rest = standing_unexplained(scene.cloud, standing, found, _trees(library), REACH)
     # The chassis' points are all explained; of the bushing's, all that stand clear of the table are not.
     height = scene.cloud.points @ plane[:3] + plane[3]
@@ -52,7 +54,7 @@ def test_an_arm_across_the_table_is_not_part_sized_but_a_part_is(parts):
     _, meshes = parts
     scene = workpiece_scene(np.random.default_rng(1), {"bushing": meshes["bushing"]}, ["bushing"], occluder=True)
     plane = SceneView(scene.cloud).support_plane
-    standing = standing_unexplained(scene.cloud, standing_points(scene.cloud, plane, OFF_PLANE), [], {}, REACH)
+    standing = standing_unexplained(scene.cloud, standing_points(scene.cloud, plane, STANDING), [], {}, REACH)
     kept = part_sized(scene.cloud, plane, standing, largest=0.19)
     assert kept[standing & (scene.cloud.labels == 1)].mean() > 0.95  # the bushing stays
     arm = standing & (scene.cloud.labels == OCCLUDER_LABEL)  # the capsule reaching across
@@ -77,7 +79,7 @@ def test_explained_standing_points_are_blanked_and_the_table_kept(parts):
     scene = workpiece_scene(np.random.default_rng(3), meshes, ["bushing", "chassis"])
     plane = SceneView(scene.cloud).support_plane
     found = [Detection("chassis", scene.instances[1].T_camera_model, 0.9)]
-    standing = standing_points(scene.cloud, plane, OFF_PLANE)
+    standing = standing_points(scene.cloud, plane, STANDING)
     rest = standing_unexplained(scene.cloud, standing, found, _trees(library), REACH)
     left = blanked(scene.cloud, standing & ~rest)
     kept = np.isfinite(left.points).all(axis=1)

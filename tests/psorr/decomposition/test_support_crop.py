@@ -5,9 +5,10 @@ import pytest
 import trimesh
 from scipy.spatial import cKDTree
 
-from psorr.decomposition.support_crop import SupportCropParams, crop_to_parts
+from psorr.decomposition.support_crop import SupportCropParams, crop_to_parts, standing_bar
 from psorr.errors import InvalidInputError
 from psorr.synthetic.catalog import load_catalog
+from psorr.synthetic.mesh_scenes import SceneParams, mesh_scene
 from psorr.synthetic.workpiece_scenes import workpiece_scene
 from psorr.types import PointCloud
 from psorr.verification.scene_view import SceneView
@@ -42,6 +43,24 @@ def test_far_table_is_blanked_and_every_part_point_kept_in_place():
     height = scene.cloud.points @ plane[:3] + plane[3]
     assert height[before & ~after].max() <= SupportCropParams().off_plane  # only the table, and what is under it
     assert not after[before & (height < -SupportCropParams().off_plane)].any()  # no part can be below the table
+
+
+def test_a_far_table_seen_obliquely_is_cropped_for_its_noise_not_kept_for_it():
+    # 1.3-1.4 m away and tilted 55-60 degrees, the table reaches 2 m, where the sensor's noise lifts hundreds of
+    # its points past 8 mm: each would keep a band of table around it, and the whole frame was decomposed.
+    catalog = load_catalog()
+    params = SceneParams(camera_distance=(1.3, 1.4), camera_tilt_deg=(55.0, 60.0))
+    scene = mesh_scene(np.random.default_rng(1), {"bushing": catalog["bushing"].load_mesh()}, "single",
+                       names=["bushing"], params=params)
+    plane = SceneView(scene.cloud).support_plane
+    before = scene.cloud.valid_mask
+    assert scene.cloud.points[before, 2].max() > 1.9
+    after = crop_to_parts(scene.cloud, plane, 0.09).valid_mask
+    assert after.sum() < 0.1 * before.sum()
+    assert after[before & (scene.cloud.labels == 1)].all()  # the part stays whole
+    bar = standing_bar(scene.cloud.points[before], plane, SupportCropParams())
+    assert bar.min() == SupportCropParams().off_plane and bar.max() > 0.012  # the bar rises only where noise is
+    assert (standing_bar(scene.cloud.points[before], plane, SupportCropParams(sensor_noise=False)) == 0.008).all()
 
 
 def test_nothing_is_cropped_without_a_plane_or_when_disabled():

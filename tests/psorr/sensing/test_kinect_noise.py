@@ -49,6 +49,22 @@ def test_noise_statistics_match_the_model(z):
     assert abs(error.mean()) < 0.05 * expected
 
 
+@pytest.mark.parametrize("angle, z0", [(0.0, 0.8), (55.0, 1.4)])
+def test_height_sigma_is_the_spread_of_a_planes_points_about_it(angle, z0):
+    # Seen obliquely, depth noise moves a point along its ray, partly within the plane, and lateral jitter
+    # reads a neighbouring ray's depth: the spread over the plane is what both give, not the depth's.
+    depth = tilted_plane(angle, z0)
+    noisy = apply_kinect_noise(depth, K, np.random.default_rng(2), only(axial=True, lateral=True, quantise=True))
+    cloud = depth_to_cloud(noisy, K)
+    points = cloud.points[cloud.valid_mask]
+    normal = np.array([np.sin(np.radians(angle)), 0.0, np.cos(np.radians(angle))])
+    height = points @ normal - z0 * normal[2]
+    sigma = KINECT_V1.height_sigma(points, normal, K.fx)
+    assert abs(np.std(height / sigma) - 1.0) < 0.1
+    if angle:
+        assert np.median(sigma) < 0.8 * np.median(KINECT_V1.depth_sigma(points[:, 2], K.fx))
+
+
 def test_quantisation_gives_discrete_disparities():
     depth = np.broadcast_to(np.linspace(0.6, 1.2, K.width), K.shape)
     noisy = apply_kinect_noise(depth, K, np.random.default_rng(0), only(quantise=True, axial=True))
