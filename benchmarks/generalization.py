@@ -5,7 +5,7 @@ long, split into a dev and a test half (generalization_parts.py; tune on dev onl
 library is all its parts. Scenes (psorr.synthetic.mesh_scenes): each part alone, in its stable resting
 poses; clutter of 3-5 library parts with 1-3 distractors (parts of the other half, or simple shapes);
 and the same with an arm-sized capsule across the view. Kinect v1 noise, 640x480, cameras 0.6-1.0 m
-from the table, tilted 0-45 degrees.
+from the table, tilted 0-45 degrees (--camera-distance and --camera-tilt set another cell's).
 
 A detection finds an instance within a symmetry-aware ADD of 0.1 x the model's diameter, the
 symmetries found from the mesh (psorr.synthetic.mesh_symmetry); any other detection is false. Methods:
@@ -17,10 +17,11 @@ timed: a user's first run.
 
     python benchmarks/generalization.py [--split dev|test|both|all] [--quick] [--note "what else ran"]
     python benchmarks/generalization.py --cad MY_PARTS --units m     # your own parts, any mesh format
+    python benchmarks/generalization.py --camera-distance 1.0 1.4 --camera-tilt 30 60   # your cell's camera
 
 Any other folder of meshes is split into halves the same way on every machine (generalization_parts.py:
 folder_split), or taken whole with --split all; its results are written as generalization-FOLDER.*, beside
-the published ones, not over them.
+the published ones, not over them, and so are those of another camera (generalization-camera-....*).
 
 With --methods naming some of the methods, a half whose scenes are those of the results already
 written keeps the other methods' rows from them, so that a change to one recognizer reruns only it.
@@ -45,7 +46,7 @@ from tqdm import tqdm
 
 from psorr.errors import PsorrError
 from psorr.io.meshes import MESH_SUFFIXES, UNITS
-from psorr.synthetic.mesh_scenes import SceneKind, load_meshes, mesh_scene, simple_shapes
+from psorr.synthetic.mesh_scenes import SceneKind, SceneParams, load_meshes, mesh_scene, simple_shapes
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_CAD = ROOT.parent / "shared" / "cad" / "prusa_i3"
@@ -69,6 +70,12 @@ def _arguments(argv):
     parser.add_argument("--min-length", type=float, default=gp.MIN_LENGTH * 1e3, metavar="MM",
                         help="parts shorter than this (the longest side of their bounding box) are left out; the "
                              "issue's benchmark: 25 mm (a Kinect-class sensor shows little of less)")
+    parser.add_argument("--camera-distance", type=float, nargs=2, metavar=("NEAR", "FAR"),
+                        default=SceneParams().camera_distance,
+                        help="the camera's distance from the table point it looks at, metres (default: 0.6 1.0)")
+    parser.add_argument("--camera-tilt", type=float, nargs=2, metavar=("LEAST", "MOST"),
+                        default=SceneParams().camera_tilt_deg,
+                        help="its line of sight from the vertical, degrees (default: 0 45)")
     parser.add_argument("--note", default="", help="what else ran on the machine, for the record")
     parser.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "results")
     parser.add_argument("--report-only", action="store_true",
@@ -79,6 +86,10 @@ def _arguments(argv):
         parser.error(f"unknown methods {unknown}; choose from {', '.join(METHODS)}")
     if not args.min_length > 0:
         parser.error(f"--min-length {args.min_length:g}: give a length in millimetres above 0")
+    try:
+        args.scene = SceneParams(camera_distance=tuple(args.camera_distance), camera_tilt_deg=tuple(args.camera_tilt))
+    except PsorrError as exc:
+        parser.error(f"--camera-distance {args.camera_distance} / --camera-tilt {args.camera_tilt}: {exc}")
     if args.cad is not None and not args.cad.is_dir():
         parser.error(f"{args.cad}: no such folder; give a folder of meshes with --cad (the Prusa i3 parts: see "
                      f"../shared/cad/README.md)")
@@ -151,7 +162,8 @@ def run_split(split: str, meshes: dict, paths: dict, args) -> dict:
     scenes, sketches, start = [], {}, time.perf_counter()
     plan = _scene_plan(names, split, args)
     for kind, shown, seed in tqdm(plan, desc=f"{split}: scenes, every method", file=sys.stderr):
-        scene = mesh_scene(np.random.default_rng(seed), parts, kind, names=shown, distractors=distractors)
+        scene = mesh_scene(np.random.default_rng(seed), parts, kind, names=shown, distractors=distractors,
+                           params=args.scene)
         scenes.append(_scene_record(scene, seed))
         for method, recognize in methods.items():
             begin = time.perf_counter()
@@ -167,9 +179,25 @@ def run_split(split: str, meshes: dict, paths: dict, args) -> dict:
                 sketches[str(kind)] = sketch(seed, str(kind), shown, method, detections, found, correct)
     core = sorted(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else "?"
     conditions = (f"run {time.strftime('%Y-%m-%d')} in {(time.perf_counter() - start) / 60:.0f} min on core {core} "
-                  f"of {os.cpu_count()}" + (f"; {args.note}" if args.note else ""))
+                  f"of {os.cpu_count()}" + (f"; {args.note}" if args.note else "") + _camera_note(args.scene))
     return {"parts": [class_row(infos[n]) for n in names], "scenes": scenes, "methods": results,
             "sketches": list(sketches.values()), "conditions": conditions, "train_ms": train_ms}
+
+
+def _camera_note(scene: SceneParams) -> str:
+    """What the conditions say of a camera other than the benchmark's."""
+    if (scene.camera_distance, scene.camera_tilt_deg) == (SceneParams().camera_distance, SceneParams().camera_tilt_deg):
+        return ""
+    (near, far), (least, most) = scene.camera_distance, scene.camera_tilt_deg
+    return f"; the camera {near:g}-{far:g} m from the table, tilted {least:g}-{most:g} degrees"
+
+
+def _camera_stem(scene: SceneParams) -> str:
+    """The results' name suffix for a camera other than the benchmark's ('' for its own)."""
+    if not _camera_note(scene):
+        return ""
+    (near, far), (least, most) = scene.camera_distance, scene.camera_tilt_deg
+    return f"-camera-{near:g}-{far:g}m-{least:g}-{most:g}deg"
 
 
 def _training_ms(names: list[str], paths: dict, units: str, split: str) -> dict[str, float]:
@@ -180,7 +208,7 @@ def _training_ms(names: list[str], paths: dict, units: str, split: str) -> dict[
             for n in tqdm(names, desc=f"{split}: training timed, no cache", file=sys.stderr)}
 
 
-def _drawn(data: dict, meshes: dict) -> list:
+def _drawn(data: dict, meshes: dict, scene_params: SceneParams) -> list:
     """The last half's sketched scenes, rendered again from their seeds."""
     import trimesh
     from generalization_parts import ADD_SAMPLES
@@ -189,7 +217,8 @@ def _drawn(data: dict, meshes: dict) -> list:
     names, parts, distractors = _half(split, meshes)
     samples = {n: np.asarray(trimesh.sample.sample_surface(parts[n], ADD_SAMPLES, seed=0)[0]) for n in names}
     return [drawn_scene(split, entry, mesh_scene(np.random.default_rng(entry["seed"]), parts, entry["kind"],
-                                                 names=entry["shown"], distractors=distractors), samples)
+                                                 names=entry["shown"], distractors=distractors,
+                                                 params=scene_params), samples)
             for entry in data["splits"][split].get("sketches", [])]
 
 
@@ -225,7 +254,8 @@ def main(argv=None) -> int:
     meshes, short = checked_split(load_meshes(args.cad, args.units), args.cad, args.min_length / 1e3)
     print(f"{len(meshes)} parts of at least {args.min_length:g} mm in {args.cad}"
           + (f"; left out as shorter: {', '.join(short)}" if short else "; none shorter"), file=sys.stderr)
-    base = "generalization" if gp.is_prusa(meshes) else f"generalization-{args.cad.resolve().name}"
+    base = ("generalization" if gp.is_prusa(meshes) else f"generalization-{args.cad.resolve().name}") + _camera_stem(
+        args.scene)
     stem = f"{base}.quick" if args.quick else base
     json_path = args.out / f"{stem}.json"
     data = json.loads(json_path.read_text()) if json_path.exists() else {"splits": {}}
@@ -239,7 +269,7 @@ def main(argv=None) -> int:
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / f"{stem}.md").write_text(text)
     json_path.write_text(json.dumps(data, indent=1) + "\n")
-    plot(data, _drawn(data, meshes), args.out / f"{stem}.png")
+    plot(data, _drawn(data, meshes, args.scene), args.out / f"{stem}.png")
     return 0
 
 

@@ -147,7 +147,7 @@ def test_a_half_without_a_thin_part_has_no_thin_target_to_meet_or_miss():
     assert "| dev | thin | - | >= 0.8 | no instance |" in report.targets_table(data)
 
 
-def test_the_benchmark_runs_on_a_folder_of_a_users_meshes_in_any_format(tmp_path):
+def test_the_benchmark_runs_on_a_folder_of_a_users_meshes_in_any_format_and_camera(tmp_path):
     folder = tmp_path / "my_parts"
     folder.mkdir()
     for name, mesh, suffix in (("block", box((0.05, 0.03, 0.02)), "stl"), ("plate", plate_with_hole(), "obj"),
@@ -155,14 +155,23 @@ def test_the_benchmark_runs_on_a_folder_of_a_users_meshes_in_any_format(tmp_path
         mesh.export(folder / f"{name}.{suffix}")
     out = tmp_path / "results"
     run = subprocess.run([sys.executable, str(BENCHMARKS / "generalization.py"), "--cad", str(folder), "--units", "m",
-                          "--split", "all", "--quick", "--methods", "psorr", "--out", str(out)],
+                          "--split", "all", "--quick", "--methods", "psorr", "--out", str(out),
+                          "--camera-distance", "1.0", "1.2", "--camera-tilt", "30", "50"],
                          capture_output=True, text=True, timeout=600)
     assert run.returncode == 0, run.stderr[-2000:]
     assert "left out as shorter: tiny" in run.stderr
-    written = json.loads((out / "generalization-my_parts.quick.json").read_text())
+    stem = "generalization-my_parts-camera-1-1.2m-30-50deg.quick"
+    written = json.loads((out / f"{stem}.json").read_text())
     assert list(written["splits"]) == ["all"] and [p["part"] for p in written["splits"]["all"]["parts"]] == [
         "block", "plate"]
-    assert (out / "generalization-my_parts.quick.png").stat().st_size > 0
+    assert "the camera 1-1.2 m from the table, tilted 30-50 degrees" in written["splits"]["all"]["conditions"]
+    assert (out / f"{stem}.png").stat().st_size > 0
+
+
+def test_a_camera_tilted_past_the_horizon_is_refused_naming_the_flags():
+    run = subprocess.run([sys.executable, str(BENCHMARKS / "generalization.py"), "--camera-tilt", "30", "95"],
+                         capture_output=True, text=True, timeout=120)
+    assert run.returncode == 2 and "--camera-tilt" in run.stderr and "under 90 degrees" in run.stderr
 
 
 def test_times_are_reported_by_scene_kind():
