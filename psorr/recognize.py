@@ -43,6 +43,7 @@ from psorr.library.orr_table import OrrTable
 from psorr.library.ppf import scene_oriented_points
 from psorr.recognize_params import Method, Recognition, RecognitionStats, RecognizeParams
 from psorr.segment.per_segment import search_per_segment
+from psorr.sensing.noise_context import noise_model
 from psorr.sensing.resolution import thin_to_focal
 from psorr.types import Detection, PointCloud, PrimitiveKind
 from psorr.verification.scene_view import SceneView
@@ -108,7 +109,7 @@ class Recognizer:
         (:mod:`psorr.acceptance.known`): a cell that looks again after each pick recognises what moved.
 
         ``observer``: gets every stage as it happens (:class:`psorr.viz.RerunLogger` records them for Rerun)."""
-        with observed_by(observer) as watcher:
+        with observed_by(observer) as watcher, noise_model(self.params.sensor):
             result = self._recognize(cloud, rng, known)
             watcher.detections(result.detections, self.library)
             for stage, ms in (("decomposition", result.stats.decomposition_ms), ("total", result.stats.total_ms)):
@@ -152,9 +153,9 @@ class Recognizer:
         if not isinstance(cloud, PointCloud):
             raise InvalidInputError(f"refine() takes a psorr.PointCloud, got {type(cloud).__name__}")
         require_seen_from_origin(cloud, "refine(): the cloud")
-        m = self.library.model(model)
-        T = require_sensor_pose(T_cloud_model, "refine()'s T_cloud_model")
-        return self.acceptance.refine(SceneView(self._at_sensor_sampling(cloud)), m, T)
+        m, T = self.library.model(model), require_sensor_pose(T_cloud_model, "refine()'s T_cloud_model")
+        with noise_model(self.params.sensor):
+            return self.acceptance.refine(SceneView(self._at_sensor_sampling(cloud)), m, T)
 
     def _at_sensor_sampling(self, cloud: PointCloud) -> PointCloud:
         """The cloud thinned to the sampling the thresholds suit, when it is finer (a 3M-point

@@ -17,6 +17,7 @@ from psorr.hypotheses.pairs import PairParams
 from psorr.hypotheses.psg import PsgParams
 from psorr.hypotheses.single_cylinder import SingleCylinderParams
 from psorr.hypotheses.single_plane import SinglePlaneParams
+from psorr.sensing.kinect_noise import KINECT_V1, KinectNoise
 from psorr.types import Detection, Method
 
 
@@ -32,7 +33,9 @@ class RecognizeParams:
     - ``outline``: poses of parts resting on the table, from the patches they raise (PSORR and PSG; on by default);
     - ``psg``: PSG matching's cliques and QPBO (``method="psg"``, and ``"auto"`` for the models of many primitives);
     - ``orr``: the ORR baseline's random point pairs;
-    - ``acceptance``: ICP, the point check's bars, and settling detections by the pixels they explain.
+    - ``acceptance``: ICP, the point check's bars, and settling detections by the pixels they explain;
+    - ``sensor``: the depth sensor's noise model, which every noise-scaled threshold follows (the Kinect v1's;
+      a noisier sensor needs its own, ``KinectNoise(sigma_base=..., sigma_quad=...)``: see docs/why-missed.md).
     """
 
     decompose: DecomposeParams = field(default_factory=lambda: DecomposeParams(voxel_size=0.008))
@@ -45,12 +48,13 @@ class RecognizeParams:
     psg: PsgParams = field(default_factory=PsgParams)
     orr: OrrParams = field(default_factory=OrrParams)
     acceptance: AcceptParams = field(default_factory=AcceptParams)
+    sensor: KinectNoise = KINECT_V1
 
     def __post_init__(self):
         for name, cls in (("decompose", DecomposeParams), ("support_crop", SupportCropParams),
                           ("detail", DetailParams), ("pairs", PairParams), ("single_plane", SinglePlaneParams),
                           ("single_cylinder", SingleCylinderParams), ("outline", OutlineParams), ("psg", PsgParams),
-                          ("orr", OrrParams), ("acceptance", AcceptParams)):
+                          ("orr", OrrParams), ("acceptance", AcceptParams), ("sensor", KinectNoise)):
             check.instance(self, name, cls)
 
     def for_stacked_parts(self) -> RecognizeParams:

@@ -20,7 +20,7 @@ import numpy as np
 
 from psorr.acceptance.icp import STOP_STEP, damped_step
 from psorr.geometry.rotations import from_rotation_vector
-from psorr.sensing.kinect_noise import KINECT_V1
+from psorr.sensing.noise_context import depth_noise
 from psorr.verification.depth_compare import DepthRenderer, pixel_window
 from psorr.verification.scene_view import SceneView
 
@@ -39,7 +39,7 @@ def refine_projective(view: SceneView, renderer: DepthRenderer, T_cloud_model: n
     part; ``renderer`` renders the model. Returns ``T_cloud_model`` when fewer than MIN_PAIRS pixels pair."""
     pixels, rays = pixel_window(view, centre, radius)
     measured = view.depth[pixels]
-    sigma = KINECT_V1.depth_sigma(measured)
+    sigma = depth_noise().depth_sigma(measured)
     measured_points = rays * measured[:, None]
     T = T_cloud_model
     for _ in range(iterations):

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from psorr.acceptance.render_judge import DECISIVE_SPREADS
-from psorr.sensing.kinect_noise import KINECT_V1
+from psorr.sensing.noise_context import depth_noise
 from psorr.verification.depth_compare import RESIDUAL_CAP, DepthRenderer, table_costs
 from psorr.verification.point_check import CheckParams, PoseCheck, depth_tolerance
 from psorr.verification.scene_view import SceneView
@@ -44,7 +44,7 @@ def clear_of_table(view: SceneView, model, renderer: DepthRenderer, T_cloud_mode
     points = points[facing]
     heights = points @ plane[:3] + plane[3]
     could_show = np.mean(heights > depth_tolerance(points[:, 2], params)) * check.n_visible
-    step = float(KINECT_V1.quantisation_step(np.median(points[:, 2])))
+    step = float(depth_noise().quantisation_step(np.median(points[:, 2])))
     if could_show >= need or np.median(heights) < RESOLVABLE_STEPS * step:
         return False
     centre = R @ model.points.mean(axis=0) + t

@@ -21,7 +21,7 @@ from psorr.errors import InvalidInputError
 from psorr.geometry import shapes
 from psorr.geometry.boxes import box_around_axis
 from psorr.geometry.columns import column_mean
-from psorr.sensing.kinect_noise import KINECT_V1
+from psorr.sensing.noise_context import depth_noise
 from psorr.types import PointCloud, Primitive, PrimitiveKind, PrimitiveShapeGraph
 
 
@@ -106,7 +106,7 @@ def inlier_threshold(points: np.ndarray, params: DecomposeParams) -> np.ndarray:
     """(N,) inlier distance for each point, metres."""
     if not params.sensor_noise:
         return np.full(len(points), params.min_inlier_distance)
-    return np.maximum(params.min_inlier_distance, params.inlier_sigmas * KINECT_V1.depth_sigma(points[:, 2]))
+    return np.maximum(params.min_inlier_distance, params.inlier_sigmas * depth_noise().depth_sigma(points[:, 2]))
 
 
 def decompose(cloud: PointCloud, params: DecomposeParams | None = None,

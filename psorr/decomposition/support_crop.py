@@ -20,7 +20,7 @@ from scipy.special import ndtri
 
 from psorr.checks import params as check
 from psorr.geometry.boxes import orthonormal_frame
-from psorr.sensing.kinect_noise import KINECT_V1
+from psorr.sensing.noise_context import depth_noise
 from psorr.types import PointCloud, PrimitiveKind
 
 _MAX_GRID_CELLS = 20_000_000  # 20 MB of bools: a 1 cm grid 44 m square
@@ -49,7 +49,7 @@ def standing_bar(points: np.ndarray, plane: np.ndarray, params: SupportCropParam
     bar = np.full(len(points), params.off_plane)
     if params.sensor_noise and len(points) > 1:
         sigmas = -ndtri(1.0 / len(points))
-        bar = np.maximum(bar, sigmas * KINECT_V1.height_sigma(points, plane[:3]))
+        bar = np.maximum(bar, sigmas * depth_noise().height_sigma(points, plane[:3]))
     return bar
 
 

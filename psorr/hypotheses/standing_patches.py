@@ -16,7 +16,7 @@ from scipy.special import log_ndtr
 from psorr.geometry.boxes import orthonormal_frame
 from psorr.geometry.distance_field import DistanceField
 from psorr.geometry.grid_morphology import closing, opening
-from psorr.sensing.kinect_noise import KINECT_V1
+from psorr.sensing.noise_context import depth_noise
 from psorr.types import PointCloud
 from psorr.verification.point_check import CheckParams, depth_tolerance
 
@@ -115,7 +115,7 @@ class StandingGrid:
         members = self.owner == label if members is None else members
         outside = DistanceField.of_points(self.centres(free), self.cell, truncation)
         depth = float(np.median(self.depth[members]))
-        sigma = float(KINECT_V1.depth_sigma(np.array([depth]))[0])
+        sigma = float(depth_noise().depth_sigma(np.array([depth]))[0])
         # A depth error moves a point along its ray: its height by the error times the sensor's height over the depth.
         over_table = self.T_cloud_table[:3, 3] @ self.T_cloud_table[:3, 2]
         return Patch(self.points[members], outside, float(depth_tolerance(depth, check)),
@@ -156,7 +156,7 @@ def standing_grid(cloud: PointCloud, plane: np.ndarray, params, tallest: float, 
     height = points @ plane[:3] + plane[3]
     # The sensor's sigma only where the floor is cleared: a tenth of the points on a noisy table.
     standing = height > p.min_height
-    standing[standing] = height[standing] > p.sigmas * KINECT_V1.depth_sigma(points[standing, 2])
+    standing[standing] = height[standing] > p.sigmas * depth_noise().depth_sigma(points[standing, 2])
     # Higher than any resting model reaches, a point is something else's (an arm reaching in): it neither
     # joins a patch nor counts among its cells' points, or a part under the arm would join the arm's patch.
     # The tolerance is looked up only for the few points above the tallest rest, not the whole image.

@@ -33,7 +33,7 @@ from psorr.segment.convexity import (
     join_unless_concave,
     median_bend,
 )
-from psorr.sensing.kinect_noise import KINECT_V1
+from psorr.sensing.noise_context import depth_noise
 from psorr.types import PointCloud
 
 
@@ -109,7 +109,7 @@ def standing_rows(cloud: PointCloud, params: SegmentParams) -> tuple[np.ndarray,
         return rows, None
     along, height = along_plane(cloud.points[rows], table.plane)
     z = cloud.points[rows, 2]
-    above = height > np.maximum(params.min_height, params.height_sigmas * KINECT_V1.depth_sigma(z))
+    above = height > np.maximum(params.min_height, params.height_sigmas * depth_noise().depth_sigma(z))
     outline, _ = along_plane(np.asarray(down.points)[table.inliers], table.plane)
     inside = Delaunay(outline[_hull(outline)]).find_simplex(along[above]) >= 0
     return rows[np.flatnonzero(above)[inside]], table.plane

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from psorr.sensing.kinect_noise import KINECT_V1
+from psorr.sensing.noise_context import depth_noise
 from psorr.types import PointCloud
 
 # Points per occupied pixel at which a cloud counts as finer than the sensor (docs/decisions/0050): the
@@ -98,7 +98,7 @@ def _first_on_nearest_surface(points: np.ndarray, cells: _Cells, focal: float) -
     z = points[:, 2]
     nearest = np.full(cells.n_pixels, np.inf)
     np.minimum.at(nearest, cells.pixel, z)
-    reach = nearest + _NOISE_SPAN * KINECT_V1.depth_sigma(np.where(np.isfinite(nearest), nearest, 1.0), focal)
+    reach = nearest + _NOISE_SPAN * depth_noise().depth_sigma(np.where(np.isfinite(nearest), nearest, 1.0), focal)
     front = np.flatnonzero(z <= reach[cells.pixel])
     first = np.full(cells.n_pixels, len(points))
     np.minimum.at(first, cells.pixel[front], front)

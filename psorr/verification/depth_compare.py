@@ -14,7 +14,7 @@ import numpy as np
 import open3d as o3d
 from scipy.ndimage import binary_dilation
 
-from psorr.sensing.kinect_noise import KINECT_V1
+from psorr.sensing.noise_context import depth_noise
 from psorr.verification.scene_view import SceneView
 
 RESIDUAL_CAP = 9.0  # squared sigmas: one pixel that disagrees costs at most a 3-sigma miss
@@ -206,7 +206,7 @@ def _window_costs(view: SceneView, centre: np.ndarray, radius: float, render, sw
             plane = np.where(towards < 0, -offset / np.where(towards < 0, towards, -1.0), np.inf)
         rendered = np.minimum(rendered, plane[None])
     observed = view.depth[pixels]
-    sigma = KINECT_V1.depth_sigma(observed)
+    sigma = depth_noise().depth_sigma(observed)
     residual = (rendered - observed[None]) / sigma[None]
     cost = np.minimum(np.where(np.isfinite(residual), residual**2, RESIDUAL_CAP), RESIDUAL_CAP)
     return cost, rendered, sigma

@@ -22,7 +22,7 @@ import numpy as np
 
 from psorr.checks import params as check
 from psorr.errors import InvalidInputError
-from psorr.sensing.kinect_noise import KINECT_V1
+from psorr.sensing.noise_context import depth_noise
 
 # Self-occlusion cells (pose x pixel block) indexed directly up to this many (32 MB of float64); beyond,
 # only the cells in use are. A 640x480 buffer has about 19500 blocks: 64 poses take 1.25 million.
@@ -80,7 +80,7 @@ class PoseCheck:
 
 
 def depth_tolerance(z: np.ndarray, params: CheckParams) -> np.ndarray:
-    sigma = KINECT_V1.depth_sigma(z)
+    sigma = depth_noise().depth_sigma(z)
     return np.maximum(params.min_tolerance, params.sigmas * sigma)
 
 
