@@ -84,6 +84,7 @@ def _recognize(args) -> int:
     from psorr.library.sources import library_from_arguments
     from psorr.recognize import Recognizer
     from psorr.recognize_params import RecognizeParams
+    from psorr.sensing.kinect_noise import KINECT_V1
 
     # The outputs and the scene first: a wrong path should not wait for a new library to train.
     check_output(args.png, "--png", ".png")
@@ -93,7 +94,8 @@ def _recognize(args) -> int:
     library = library_from_arguments(args.models, units=args.units,
                                      progress=lambda xs: tqdm(xs, desc="training", file=sys.stderr))
     _log(f"read {args.scene}: {len(cloud)} points; models {', '.join(library.names)}")
-    params = RecognizeParams().for_stacked_parts() if args.stacked else RecognizeParams()
+    params = RecognizeParams(sensor=KINECT_V1.noisier(args.noise_scale))
+    params = params.for_stacked_parts() if args.stacked else params
     recognizer = Recognizer(library, method=args.method, params=params, use_colour=args.colour)
     result = recognizer.recognize(cloud, np.random.default_rng(args.seed), observer=logger)
     if logger is not None:
@@ -192,6 +194,10 @@ def build_parser() -> argparse.ArgumentParser:
                      help="parts may lie on other objects or sit flush with them: no limit on how high a part "
                           "floats over the table, and no continuation check (by default a part whose faces "
                           "the measured surface continues past its outline is taken to be a larger object)")
+    rec.add_argument("--noise-scale", type=noise_scale, default=1.0, metavar="F",
+                     help="the sensor's axial depth noise as F times a Kinect v1's (default 1), which every "
+                          "noise-scaled threshold follows: a flat table's depth spread about its plane, over the "
+                          "Kinect's at that depth (psorr.sensing.KINECT_V1.depth_sigma)")
     rec.add_argument("--colour", action="store_true",
                      help="segment the scene by colour and distance first and recognise each segment alone; "
                           "each detection carries its segment's colour (a cloud without colours: by distance)")
@@ -227,6 +233,18 @@ def voxel_metres(text: str) -> float:
         raise argparse.ArgumentTypeError(f"expected a voxel size in metres from 0.001 to 0.1, got {text!r} (the "
                                          f"default is {DEFAULT_VOXEL_SIZE}; a value in millimetres is 1000x too big)")
     return size
+
+
+def noise_scale(text: str) -> float:
+    """An argparse type: a sensor's depth noise as a multiple of a Kinect v1's, from 0.1 to 10."""
+    try:
+        scale = float(text)
+    except ValueError:
+        scale = float("nan")
+    if not 0.1 <= scale <= 10:
+        raise argparse.ArgumentTypeError(f"expected the sensor's noise as a multiple of a Kinect v1's, from 0.1 to "
+                                         f"10, got {text!r}")
+    return scale
 
 
 def at_least_one(text: str) -> int:

@@ -20,7 +20,7 @@ from the rng argument in a fixed order, so a seed gives bit-identical output.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -75,6 +75,15 @@ class KinectNoise:
                 raise InvalidInputError(f"{name} is a probability and must lie in [0, 1]")
         if min(self.lateral_sigma_px, self.disparity_step_px, self.edge_jump) <= 0:
             raise InvalidInputError("lateral_sigma_px, disparity_step_px and edge_jump must be > 0")
+
+    def noisier(self, factor: float) -> KinectNoise:
+        """This model with its axial noise ``factor`` times as large, its quantisation as it is: a sensor measured
+        noisier or cleaner than this one. ``factor`` 1 gives this model itself."""
+        if factor == 1:
+            return self
+        if not factor > 0:
+            raise InvalidInputError(f"a noise factor must be above 0, got {factor!r}")
+        return replace(self, sigma_base=self.sigma_base * factor, sigma_quad=self.sigma_quad * factor)
 
     def axial_sigma(self, z) -> np.ndarray:
         """Standard deviation of the axial noise (metres) at depth z (metres)."""

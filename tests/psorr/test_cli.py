@@ -87,6 +87,36 @@ def test_voxel_size_zero_is_refused_not_taken_for_the_default(tmp_path, capsys):
             f"'{size}'" in out.stderr
 
 
+def test_a_noise_scale_out_of_range_is_refused_and_one_in_range_reaches_the_recognizer(tmp_path, capsys,
+                                                                                    monkeypatch):
+    for scale in ("0", "-1", "nan", "20", "x"):
+        out = _here(capsys, "recognize", str(tmp_path / "a.stl"), str(tmp_path / "b.npy"), "--noise-scale", scale)
+        assert out.returncode == 2 and "--noise-scale: expected the sensor's noise as a multiple" in out.stderr
+    import trimesh
+
+    from psorr.recognize import Recognizer
+    from psorr.sensing import KINECT_V1
+
+    trimesh.creation.box(extents=(0.08, 0.05, 0.03)).export(tmp_path / "block.stl")
+    scene = synthetic.box_on_table(np.random.default_rng(0))
+    np.save(tmp_path / "scene.npy", scene.cloud.points)
+    given = []
+
+    def recorded(recognizer, *args, **kwargs):
+        given.append(recognizer.params.sensor)
+        raise _Stop
+
+    monkeypatch.setattr(Recognizer, "recognize", recorded)
+    with pytest.raises(_Stop):
+        main(["recognize", str(tmp_path / "block.stl"), str(tmp_path / "scene.npy"), "--noise-scale", "2"])
+    assert given[0].sigma_base == 2 * KINECT_V1.sigma_base and given[0].sigma_quad == 2 * KINECT_V1.sigma_quad
+    assert given[0].disparity_step_px == KINECT_V1.disparity_step_px
+
+
+class _Stop(Exception):
+    """Raised in place of a recognition whose settings are all a test needs."""
+
+
 def test_help_states_the_decomposition_default_voxel_size(capsys):
     from psorr.cli import DEFAULT_VOXEL_SIZE
     from psorr.decomposition import DecomposeParams

@@ -167,3 +167,13 @@ def test_depth_to_cloud_back_projects_pixels():
     np.testing.assert_allclose(first, [[2, 0], [3, 0], [4, 0]], atol=1e-9)
     with pytest.raises(InvalidInputError):
         depth_to_cloud(np.ones((4, 4)), K)
+
+
+def test_a_noisier_sensor_scales_the_axial_noise_only():
+    assert KINECT_V1.noisier(1) is KINECT_V1
+    twice = KINECT_V1.noisier(2.0)
+    z = np.array([0.6, 1.0, 1.6])
+    np.testing.assert_allclose(twice.axial_sigma(z), 2 * KINECT_V1.axial_sigma(z))
+    np.testing.assert_allclose(twice.quantisation_step(z), KINECT_V1.quantisation_step(z))
+    with pytest.raises(InvalidInputError, match="above 0"):
+        KINECT_V1.noisier(0.0)
