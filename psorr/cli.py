@@ -222,29 +222,26 @@ def seed(text: str) -> int:
     return _whole_number(text, 0, "a seed")
 
 
+def _number_within(text: str, least: float, most: float, what: str, hint: str = "") -> float:
+    try:
+        number = float(text)
+    except ValueError:
+        number = float("nan")
+    if not least <= number <= most:  # NaN too
+        raise argparse.ArgumentTypeError(f"expected {what} from {least:g} to {most:g}, got {text!r}{hint}")
+    return number
+
+
 def voxel_metres(text: str) -> float:
     """An argparse type: a voxel size in metres, from 1 mm to 10 cm. Under a millimetre no depth sensor's
     points fill voxels (a cloud of 5 clumps gave 0 primitives at 1e-6 m); beyond 10 cm a voxel holds a part."""
-    try:
-        size = float(text)
-    except ValueError:
-        size = float("nan")
-    if not 0.001 <= size <= 0.1:
-        raise argparse.ArgumentTypeError(f"expected a voxel size in metres from 0.001 to 0.1, got {text!r} (the "
-                                         f"default is {DEFAULT_VOXEL_SIZE}; a value in millimetres is 1000x too big)")
-    return size
+    return _number_within(text, 0.001, 0.1, "a voxel size in metres", f" (the default is {DEFAULT_VOXEL_SIZE}; "
+                          "a value in millimetres is 1000x too big)")
 
 
 def noise_scale(text: str) -> float:
     """An argparse type: a sensor's depth noise as a multiple of a Kinect v1's, from 0.1 to 10."""
-    try:
-        scale = float(text)
-    except ValueError:
-        scale = float("nan")
-    if not 0.1 <= scale <= 10:
-        raise argparse.ArgumentTypeError(f"expected the sensor's noise as a multiple of a Kinect v1's, from 0.1 to "
-                                         f"10, got {text!r}")
-    return scale
+    return _number_within(text, 0.1, 10, "the sensor's noise as a multiple of a Kinect v1's,")
 
 
 def at_least_one(text: str) -> int:
