@@ -8,8 +8,11 @@ import numpy as np
 import open3d as o3d
 
 from psorr.geometry.open3d_threads import single_threaded
+from psorr.sensing.kinect_noise import KINECT_V1
+from psorr.sensing.noise_context import depth_noise
 
-_DISTANCE = 0.008  # m: a plane's inlier band, three Kinect depth sigmas at 1.2 m
+_DISTANCE = 0.008  # m: a plane's inlier band for a Kinect v1, three of its depth sigmas at 1.2 m
+_BAND_DEPTH = 1.2  # m: where the band is measured in the sensor's sigmas
 _MIN_SHARE = 0.2   # of the points: a smaller largest plane is no table
 _REFITS = 5        # least-squares refits of RANSAC's plane: two or three settle its inliers
 
@@ -30,15 +33,24 @@ def support_plane(cloud: o3d.geometry.PointCloud) -> SupportPlane | None:
         return None
     o3d.utility.random.seed(0)
     with single_threaded():
-        plane, inliers = cloud.segment_plane(distance_threshold=_DISTANCE, ransac_n=3, num_iterations=200)
+        plane, inliers = cloud.segment_plane(distance_threshold=band(), ransac_n=3, num_iterations=200)
     if len(inliers) <= _MIN_SHARE * len(cloud.points):
         return None
     plane, inliers = _refined(np.asarray(cloud.points), np.asarray(plane, float), np.asarray(inliers, dtype=np.int64))
     return SupportPlane(plane if plane[3] > 0 else -plane, inliers)
 
 
+def band() -> float:
+    """The plane's inlier band (m): _DISTANCE for a Kinect v1, as many of the sensor's depth sigmas at 1.2 m
+    for another (``RecognizeParams.sensor``)."""
+    noise = depth_noise()
+    if noise is KINECT_V1:
+        return _DISTANCE
+    return _DISTANCE * float(noise.depth_sigma(_BAND_DEPTH) / KINECT_V1.depth_sigma(_BAND_DEPTH))
+
+
 def _refined(points: np.ndarray, plane: np.ndarray, inliers: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The least-squares plane of the points within _DISTANCE of ``plane``, refitted until its inliers stay
+    """The least-squares plane of the points within the band of ``plane``, refitted until its inliers stay
     the same (at most _REFITS times), and those inliers. RANSAC's plane is the best of its draws, which
     depend on the points' order; the least-squares plane of a hundred thousand inliers does not."""
     plane = plane / np.linalg.norm(plane[:3])
@@ -49,7 +61,7 @@ def _refined(points: np.ndarray, plane: np.ndarray, inliers: np.ndarray) -> tupl
         normal = np.linalg.eigh(spread.T @ spread)[1][:, 0]
         normal = normal if normal @ plane[:3] > 0 else -normal
         plane = np.append(normal, -normal @ centre)
-        again = np.flatnonzero(np.abs(points @ normal + plane[3]) <= _DISTANCE)
+        again = np.flatnonzero(np.abs(points @ normal + plane[3]) <= band())
         if np.array_equal(again, inliers):
             break
         inliers = again

@@ -111,7 +111,7 @@ def pixel_window(view: SceneView, centre: np.ndarray, radius: float, sweep: floa
 def residual_costs(view: SceneView, renderer: DepthRenderer, poses: np.ndarray, centre: np.ndarray,
                    radius: float, discriminative: bool = True, sweep: float = 0.0,
                    within: np.ndarray | None = None) -> np.ndarray:
-    """(K,) cost of each pose (K, 4, 4): the summed squared depth residual, in Kinect sigmas and
+    """(K,) cost of each pose (K, 4, 4): the summed squared depth residual, in the sensor's sigmas and
     capped at ``RESIDUAL_CAP``, of the rendered model (with the supporting plane behind it) against
     the measured depth, over the pixels around the sphere (``centre``, ``radius``).
 
@@ -192,7 +192,7 @@ def table_costs(view: SceneView, renderer: DepthRenderer, T_cloud_model: np.ndar
 def _window_costs(view: SceneView, centre: np.ndarray, radius: float, render, sweep: float = 0.0,
                   within: np.ndarray | None = None):
     """Over the measured pixels around the sphere (``centre``, ``radius``): each render's (K, P) squared depth
-    residual in Kinect sigmas, capped at RESIDUAL_CAP (a render that misses where the sensor measured costs the
+    residual in the sensor's sigmas, capped at RESIDUAL_CAP (a render that misses where the sensor measured costs the
     cap); the (K, P) depths ``render(rays)`` gives for the pixels' rays (P, 3), with the view's supporting plane
     behind them; and the (P,) sigmas. None when no pixel around it was measured."""
     pixels, rays = pixel_window(view, centre, radius, sweep, within)

@@ -31,7 +31,8 @@ _MAX_CELLS = 4_000_000
 
 @dataclass(frozen=True)
 class CheckParams:
-    """Tolerances of the point check: depth agreement is max(min_tolerance, sigmas x Kinect sigma(z)).
+    """Tolerances of the point check: depth agreement is max(min_tolerance, sigmas x sigma(z)), sigma the
+    sensor model's (``RecognizeParams.sensor``, a Kinect v1's by default).
     At most about ``max_points`` of a model's samples are checked (every k-th)."""
 
     sigmas: float = 3.0

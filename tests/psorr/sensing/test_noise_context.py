@@ -5,6 +5,7 @@ import pytest
 import trimesh
 
 from psorr.decomposition.pipeline import DecomposeParams, inlier_threshold
+from psorr.geometry.support_plane import band
 from psorr.library.models import ModelLibrary
 from psorr.recognize import Recognizer
 from psorr.recognize_params import RecognizeParams
@@ -32,8 +33,10 @@ def test_noise_scaled_thresholds_follow_the_model():
     points = np.column_stack([np.zeros((3, 2)), z])
     with noise_model(NOISIER):
         tolerance, inliers = depth_tolerance(z, CheckParams()), inlier_threshold(points, DecomposeParams())
+        table_band = band()
     assert (tolerance[1:] > depth_tolerance(z, CheckParams())[1:]).all()
     assert (inliers[1:] > inlier_threshold(points, DecomposeParams())[1:]).all()
+    assert band() == 0.008 and table_band > 1.5 * band()  # the supporting plane's RANSAC band
 
 
 class _Seen(RecognitionObserver):
