@@ -41,16 +41,28 @@ class SupportCropParams:
         check.positive(self, "off_plane", "cell", unit=" metres")
 
 
-def standing_bar(points: np.ndarray, plane: np.ndarray, params: SupportCropParams) -> np.ndarray:
+def standing_bar(points: np.ndarray, plane: np.ndarray, params: SupportCropParams,
+                 n_points: int | None = None) -> np.ndarray:
     """(N,) the height (m) over the supporting ``plane`` (a, b, c, d; unit normal) past which each of ``points``
-    (N, 3), a cloud's finite points, stands on it: ``off_plane``, or where the sensor's noise is larger the
-    height its noise lifts fewer than one of N points of the plane itself past (a Kinect seeing a table 2 m
-    away lifted 581 of its 269,000 points past 8 mm; docs/decisions/0010-support-crop.md)."""
+    (N, 3), of a cloud of ``n_points`` finite points (None: these), stands on it: ``off_plane``, or where the
+    sensor's noise is larger the height its noise lifts fewer than one of the cloud's points of the plane itself
+    past (a Kinect seeing a table 2 m away lifted 581 of its 269,000 points past 8 mm;
+    docs/decisions/0010-support-crop.md)."""
+    n_points = len(points) if n_points is None else n_points
     bar = np.full(len(points), params.off_plane)
-    if params.sensor_noise and len(points) > 1:
-        sigmas = -ndtri(1.0 / len(points))
+    if params.sensor_noise and n_points > 1:
+        sigmas = -ndtri(1.0 / n_points)
         bar = np.maximum(bar, sigmas * depth_noise().height_sigma(points, plane[:3]))
     return bar
+
+
+def past_bar(points: np.ndarray, heights: np.ndarray, plane: np.ndarray, params: SupportCropParams) -> np.ndarray:
+    """(N,) bool: does each of a cloud's finite ``points`` (N, 3) lie farther from the ``plane`` than
+    :func:`standing_bar` (``heights`` (N,) its signed heights over it)? The bar is never below ``off_plane``, so
+    the noise is looked up only for the few points past that: most of a frame is table."""
+    past = np.abs(heights) > params.off_plane
+    past[past] = np.abs(heights[past]) > standing_bar(points[past], plane, params, len(points))
+    return past
 
 
 def standing_points(cloud: PointCloud, plane: np.ndarray | None, params: SupportCropParams) -> np.ndarray:
@@ -60,7 +72,8 @@ def standing_points(cloud: PointCloud, plane: np.ndarray | None, params: Support
     standing = finite.copy()
     if plane is not None:
         points = cloud.points[finite]
-        standing[finite] = points @ np.asarray(plane[:3]) + plane[3] > standing_bar(points, plane, params)
+        heights = points @ np.asarray(plane[:3]) + plane[3]
+        standing[finite] = (heights > 0) & past_bar(points, heights, plane, params)
     return standing
 
 
@@ -119,11 +132,11 @@ def _on_grid(cloud: PointCloud, plane: np.ndarray, params: SupportCropParams):
     and which of them (M,) stand on it and which lie below it, by :func:`standing_bar`."""
     finite = np.flatnonzero(cloud.valid_mask)
     along, height = along_plane(cloud.points[finite], plane)
-    bar = standing_bar(cloud.points[finite], plane, params)
+    past = past_bar(cloud.points[finite], height, plane, params)
     # Column by column: a reduction over axis 0 of an (N, 2) array took 5-7 ms on a 640x480 cloud.
     lowest = np.array([along[:, 0].min(), along[:, 1].min()]) if len(along) else np.zeros(2)
     cells = np.floor((along - lowest) / params.cell).astype(np.int64)
-    return finite, cells, height > bar, height < -bar
+    return finite, cells, past & (height > 0), past & (height < 0)
 
 
 def _near_cells(cells: np.ndarray, occupied: np.ndarray, reach: int) -> np.ndarray:
