@@ -29,9 +29,8 @@ from psorr.types import PointCloud, Primitive, PrimitiveKind, PrimitiveShapeGrap
 class DecomposeParams:
     """Settings of the decomposition; the defaults suit a Kinect v1 cloud of a table top.
 
-    Distances are metres. Thresholds that scale with sensor noise are given in
-    multiples of the sensor model's depth sigma at each point's depth (a Kinect v1's unless a
-    recognition gives another: ``RecognizeParams.sensor``).
+    Distances are metres. Thresholds that scale with sensor noise are given in multiples of
+    the sensor model's depth sigma at each point's depth (``RecognizeParams.sensor``; a Kinect v1's).
     """
 
     voxel_size: float = 0.012

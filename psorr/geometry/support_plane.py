@@ -33,24 +33,24 @@ def support_plane(cloud: o3d.geometry.PointCloud) -> SupportPlane | None:
         return None
     o3d.utility.random.seed(0)
     with single_threaded():
-        plane, inliers = cloud.segment_plane(distance_threshold=band(), ransac_n=3, num_iterations=200)
+        distance = band()
+        plane, inliers = cloud.segment_plane(distance_threshold=distance, ransac_n=3, num_iterations=200)
     if len(inliers) <= _MIN_SHARE * len(cloud.points):
         return None
-    plane, inliers = _refined(np.asarray(cloud.points), np.asarray(plane, float), np.asarray(inliers, dtype=np.int64))
+    plane, inliers = _refined(np.asarray(cloud.points), np.asarray(plane, float), np.asarray(inliers, dtype=np.int64),
+                              distance)
     return SupportPlane(plane if plane[3] > 0 else -plane, inliers)
 
 
 def band() -> float:
     """The plane's inlier band (m): _DISTANCE for a Kinect v1, as many of the sensor's depth sigmas at 1.2 m
     for another (``RecognizeParams.sensor``)."""
-    noise = depth_noise()
-    if noise is KINECT_V1:
-        return _DISTANCE
-    return _DISTANCE * float(noise.depth_sigma(_BAND_DEPTH) / KINECT_V1.depth_sigma(_BAND_DEPTH))
+    return _DISTANCE * float(depth_noise().depth_sigma(_BAND_DEPTH) / KINECT_V1.depth_sigma(_BAND_DEPTH))
 
 
-def _refined(points: np.ndarray, plane: np.ndarray, inliers: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The least-squares plane of the points within the band of ``plane``, refitted until its inliers stay
+def _refined(points: np.ndarray, plane: np.ndarray, inliers: np.ndarray,
+             distance: float) -> tuple[np.ndarray, np.ndarray]:
+    """The least-squares plane of the points within ``distance`` of ``plane``, refitted until its inliers stay
     the same (at most _REFITS times), and those inliers. RANSAC's plane is the best of its draws, which
     depend on the points' order; the least-squares plane of a hundred thousand inliers does not."""
     plane = plane / np.linalg.norm(plane[:3])
@@ -61,7 +61,7 @@ def _refined(points: np.ndarray, plane: np.ndarray, inliers: np.ndarray) -> tupl
         normal = np.linalg.eigh(spread.T @ spread)[1][:, 0]
         normal = normal if normal @ plane[:3] > 0 else -normal
         plane = np.append(normal, -normal @ centre)
-        again = np.flatnonzero(np.abs(points @ normal + plane[3]) <= band())
+        again = np.flatnonzero(np.abs(points @ normal + plane[3]) <= distance)
         if np.array_equal(again, inliers):
             break
         inliers = again
