@@ -184,20 +184,22 @@ def run_split(split: str, meshes: dict, paths: dict, args) -> dict:
             "sketches": list(sketches.values()), "conditions": conditions, "train_ms": train_ms}
 
 
+def _other_camera(scene: SceneParams) -> tuple[float, float, float, float] | None:
+    """(near, far, least, most) of a camera other than the benchmark's; None for its own."""
+    ranges = (*scene.camera_distance, *scene.camera_tilt_deg)
+    return None if ranges == (*SceneParams().camera_distance, *SceneParams().camera_tilt_deg) else ranges
+
+
 def _camera_note(scene: SceneParams) -> str:
     """What the conditions say of a camera other than the benchmark's."""
-    if (scene.camera_distance, scene.camera_tilt_deg) == (SceneParams().camera_distance, SceneParams().camera_tilt_deg):
-        return ""
-    (near, far), (least, most) = scene.camera_distance, scene.camera_tilt_deg
-    return f"; the camera {near:g}-{far:g} m from the table, tilted {least:g}-{most:g} degrees"
+    other = _other_camera(scene)
+    return "" if other is None else "; the camera {:g}-{:g} m from the table, tilted {:g}-{:g} degrees".format(*other)
 
 
 def _camera_stem(scene: SceneParams) -> str:
     """The results' name suffix for a camera other than the benchmark's ('' for its own)."""
-    if not _camera_note(scene):
-        return ""
-    (near, far), (least, most) = scene.camera_distance, scene.camera_tilt_deg
-    return f"-camera-{near:g}-{far:g}m-{least:g}-{most:g}deg"
+    other = _other_camera(scene)
+    return "" if other is None else "-camera-{:g}-{:g}m-{:g}-{:g}deg".format(*other)
 
 
 def _training_ms(names: list[str], paths: dict, units: str, split: str) -> dict[str, float]:
