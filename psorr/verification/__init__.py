@@ -5,7 +5,9 @@
 - :mod:`~psorr.verification.box_score`: the cheap check of the paper's section 2.1.4, model and scene
   primitive boxes intersected;
 - :mod:`~psorr.verification.point_check`: the point-level check of a pose against the depth buffer;
-- :mod:`~psorr.verification.depth_compare`: render and compare, for the features a model lacks.
+- :mod:`~psorr.verification.depth_compare`: render and compare, for the features a model lacks;
+- :mod:`~psorr.verification.lateral_jitter`: a measured pixel's likelihood over the neighbours the sensor's
+  lateral jitter may have read it from, for render and compare.
 """
 
 from psorr.verification.point_check import CheckParams, PoseCheck, check_pose, check_poses

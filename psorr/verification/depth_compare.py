@@ -15,6 +15,7 @@ import open3d as o3d
 from scipy.ndimage import binary_dilation
 
 from psorr.sensing.noise_context import depth_noise
+from psorr.verification.lateral_jitter import jitter_offsets, mixture_costs
 from psorr.verification.scene_view import SceneView
 
 RESIDUAL_CAP = 9.0  # squared sigmas: one pixel that disagrees costs at most a 3-sigma miss
@@ -91,6 +92,13 @@ def pixel_window(view: SceneView, centre: np.ndarray, radius: float, sweep: floa
     flat pixel indices (P,) and their rays (P, 3) with z = 1. A search whose poses lie ``sweep`` m apart
     where they differ most takes every k-th pixel in u and v, SAMPLES_PER_SWEEP of them across a sweep.
     ``within``: only the pixels it marks (:func:`footprint`; flat, height x width)."""
+    pixels, U, V = _window_pixels(view, centre, radius, sweep, within)
+    return pixels, view.rays(U, V)
+
+
+def _window_pixels(view: SceneView, centre: np.ndarray, radius: float, sweep: float,
+                   within: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """As :func:`pixel_window`: the flat indices (P,), columns (P,) and rows (P,)."""
     z = max(float(centre[2]) - radius, 1e-3)
     u0 = view.focal * centre[0] / centre[2] + view.cx
     v0 = view.focal * centre[1] / centre[2] + view.cy
@@ -103,9 +111,7 @@ def pixel_window(view: SceneView, centre: np.ndarray, radius: float, sweep: floa
     measured = np.isfinite(view.depth[pixels])
     if within is not None:
         measured &= within[pixels]
-    pixels, U, V = pixels[measured], U.ravel()[measured], V.ravel()[measured]
-    rays = view.rays(U, V)
-    return pixels, rays
+    return pixels[measured], U.ravel()[measured], V.ravel()[measured]
 
 
 def residual_costs(view: SceneView, renderer: DepthRenderer, poses: np.ndarray, centre: np.ndarray,
@@ -191,25 +197,38 @@ def table_costs(view: SceneView, renderer: DepthRenderer, T_cloud_model: np.ndar
 
 def _window_costs(view: SceneView, centre: np.ndarray, radius: float, render, sweep: float = 0.0,
                   within: np.ndarray | None = None):
-    """Over the measured pixels around the sphere (``centre``, ``radius``): each render's (K, P) squared depth
-    residual in the sensor's sigmas, capped at RESIDUAL_CAP (a render that misses where the sensor measured costs the
-    cap); the (K, P) depths ``render(rays)`` gives for the pixels' rays (P, 3), with the view's supporting plane
-    behind them; and the (P,) sigmas. None when no pixel around it was measured."""
-    pixels, rays = pixel_window(view, centre, radius, sweep, within)
+    """Over the measured pixels around the sphere (``centre``, ``radius``): each render's (K, P) cost in squared
+    sigmas of the sensor's depth noise, at most RESIDUAL_CAP (a render that misses where the sensor measured costs
+    the cap); the (K, P) depths ``render(rays)`` gives for the pixels' rays (P, 3), with the view's supporting
+    plane behind them; and the (P,) sigmas. The cost is -2 log of the measurement's likelihood over the
+    neighbours the sensor's lateral jitter may have read the pixel from (:mod:`psorr.verification.lateral_jitter`),
+    but in a coarse search (``sweep`` > 0), whose poses lie a sweep apart: there the squared residual tells
+    which is nearest as well, at a ninth of the work, and the fine step after it mixes.
+    None when no pixel around it was measured."""
+    pixels, U, V = _window_pixels(view, centre, radius, sweep, within)
     if len(pixels) == 0:
         return None
-    rendered = render(rays)
-    if view.support_plane is not None:
-        normal, offset = view.support_plane[:3], view.support_plane[3]
-        towards = rays @ normal
-        with np.errstate(divide="ignore"):
-            plane = np.where(towards < 0, -offset / np.where(towards < 0, towards, -1.0), np.inf)
-        rendered = np.minimum(rendered, plane[None])
     observed = view.depth[pixels]
-    sigma = depth_noise().depth_sigma(observed)
-    residual = (rendered - observed[None]) / sigma[None]
-    cost = np.minimum(np.where(np.isfinite(residual), residual**2, RESIDUAL_CAP), RESIDUAL_CAP)
-    return cost, rendered, sigma
+    noise = depth_noise()
+    sigma = noise.depth_sigma(observed)
+    offsets, weights = jitter_offsets(noise) if sweep == 0 else (np.zeros((1, 2), dtype=np.int64), np.ones(1))
+    u = np.clip(U[:, None] + offsets[None, :, 0], 0, view.width - 1)
+    v = np.clip(V[:, None] + offsets[None, :, 1], 0, view.height - 1)
+    needed, where = np.unique(v * view.width + u, return_inverse=True)
+    rays = view.rays(needed % view.width, needed // view.width)
+    rendered = _behind_support(view, render(rays), rays)[:, where.reshape(u.shape)]  # (K, P, J)
+    return mixture_costs(rendered, observed, sigma, weights, RESIDUAL_CAP), rendered[:, :, 0], sigma
+
+
+def _behind_support(view: SceneView, rendered: np.ndarray, rays: np.ndarray) -> np.ndarray:
+    """(K, P) the depths ``rendered`` along ``rays`` (P, 3), with the view's supporting plane behind them."""
+    if view.support_plane is None:
+        return rendered
+    normal, offset = view.support_plane[:3], view.support_plane[3]
+    towards = rays @ normal
+    with np.errstate(divide="ignore"):
+        plane = np.where(towards < 0, -offset / np.where(towards < 0, towards, -1.0), np.inf)
+    return np.minimum(rendered, plane[None])
 
 
 def differs(rendered: np.ndarray, other: np.ndarray, sigma: np.ndarray) -> np.ndarray:

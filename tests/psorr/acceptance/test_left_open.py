@@ -10,9 +10,11 @@ from psorr.verification.scene_view import SceneView
 
 @pytest.mark.parametrize("seed", [0, 2])
 def test_twins_the_view_cannot_tell_apart_are_the_pose_turned_in_place(tmp_path, seed):
-    """A three-spoked knob whose only asymmetry is a 1 mm slot, narrower than a pixel: its turns tie, and each
-    twin reported is the pose kept turned by the near-symmetry, as it fits the view, not an ICP refit of it
-    (which slid a knob's turn by up to a fifth of its diameter, off the table)."""
+    """A three-spoked knob whose only asymmetry is a 1 mm slot, narrower than a pixel: its turns are left open,
+    and each twin reported is the pose kept turned by the near-symmetry, as it fits the view, or a refit of it
+    that stays there, not one that slid off (an ICP refit slid a knob's turn by up to a fifth of its diameter,
+    off the table). Where the slot's pixels sum to evidence past the bar but do not rule the turn out, the
+    refit is reported: 0.4-0.7 mm from the turn in place in seed 0."""
     from part_meshes import spoked_knob, trained_library
 
     from psorr.synthetic.mesh_scenes import mesh_scene
@@ -25,8 +27,13 @@ def test_twins_the_view_cannot_tell_apart_are_the_pose_turned_in_place(tmp_path,
     T, _, alternatives = resolver.resolve(SceneView(scene.cloud), T_true, 0.012)
     assert np.allclose(T, T_true)
     assert len(alternatives) >= 2
+    points, diameter = resolver.model.points[::10], resolver.model.diameter
     for A in alternatives:
-        assert any(np.allclose(A, T @ S, atol=1e-9) for S in resolver.turns)
+        assert min(_mean_distance(points, A, T @ S) for S in resolver.turns) < 0.05 * diameter
+
+
+def _mean_distance(points: np.ndarray, A: np.ndarray, B: np.ndarray) -> float:
+    return float(np.linalg.norm(points @ (A[:3, :3] - B[:3, :3]).T + (A[:3, 3] - B[:3, 3]), axis=1).mean())
 
 
 @pytest.fixture(scope="module")
