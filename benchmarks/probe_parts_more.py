@@ -1,5 +1,6 @@
 """The probe sets from the eighth folder on (probe_parts.py): small fittings, thin covers, parts whose second
-moments are round, flat plates, tall and tilted parts, and one part in several sizes. Millimetres."""
+moments are round, flat plates, tall and tilted parts, one part in several sizes, and sheets 2-3 mm thick.
+Millimetres."""
 
 from __future__ import annotations
 
@@ -110,5 +111,20 @@ def sizes() -> dict:
     return out
 
 
+def thin_sheets() -> dict:
+    """The fifteenth folder: sheets 2-3 mm thick and 28-50 mm long, under a Kinect's per-pixel noise at 0.8 m."""
+    def hole(r, x, y):
+        return moved(cyl(r, 40), x, y, 0)
+    l_sheet = union(moved(box(40, 10, 2), 0, -7.5, 0), moved(box(10, 25, 2), -15, 0, 0))
+    notch = moved(box(8, 4, 10), 0, 8, 0)
+    return {"cover_30x20": diff(box(30, 20, 2.5), hole(1.6, -10, 0), hole(1.6, 10, 0), notch),
+            "l_sheet_40x25": diff(l_sheet, hole(1.6, 12, -7.5)),
+            "disc_35": diff(cyl(17.5, 2.5, 64), hole(4, 0, 0), hole(1.6, 11, 0)),
+            "tab_28x18": diff(box(28, 18, 2.8), moved(box(6, 6, 10), 14, 9, 0), moved(box(10, 2, 10), -4, 0, 0)),
+            "plate_50x30": diff(box(50, 30, 2), *[hole(1.7, x, y) for x in (-20, 20) for y in (-10, 10)],
+                                  box(12, 12, 10)),
+            "slotted_strip_45x15": diff(box(45, 15, 3), moved(box(20, 4, 10), 5, 0, 0), hole(2, -17, 0))}
+
+
 MORE_SETS = {"small_fittings": small_fittings, "thin_covers": thin_covers, "round_moments": round_moments,
-             "flat_plates": flat_plates, "tall_and_tilted": tall_and_tilted, "sizes": sizes}
+             "flat_plates": flat_plates, "tall_and_tilted": tall_and_tilted, "sizes": sizes, "thin_sheets": thin_sheets}
