@@ -15,7 +15,7 @@ import open3d as o3d
 from scipy.ndimage import binary_dilation
 
 from psorr.sensing.noise_context import depth_noise
-from psorr.verification.lateral_jitter import jitter_offsets, mixture_costs
+from psorr.verification.lateral_jitter import jitter_offsets, mixture_costs, own_pixel
 from psorr.verification.scene_view import SceneView
 
 RESIDUAL_CAP = 9.0  # squared sigmas: one pixel that disagrees costs at most a 3-sigma miss
@@ -211,7 +211,7 @@ def _window_costs(view: SceneView, centre: np.ndarray, radius: float, render, sw
     observed = view.depth[pixels]
     noise = depth_noise()
     sigma = noise.depth_sigma(observed)
-    offsets, weights = jitter_offsets(noise) if sweep == 0 else (np.zeros((1, 2), dtype=np.int64), np.ones(1))
+    offsets, weights = jitter_offsets(noise) if sweep == 0 else own_pixel()
     u = np.clip(U[:, None] + offsets[None, :, 0], 0, view.width - 1)
     v = np.clip(V[:, None] + offsets[None, :, 1], 0, view.height - 1)
     needed, where = np.unique(v * view.width + u, return_inverse=True)

@@ -24,6 +24,11 @@ from psorr.sensing.kinect_noise import KinectNoise
 SMALLEST_WEIGHT = 1e-3  # offsets the jitter takes a pixel to less often than this are left out of the mixture
 
 
+def own_pixel() -> tuple[np.ndarray, np.ndarray]:
+    """The mixture of a pixel read along its own ray alone: the offset (0, 0) (1, 2) of weight 1 (1,)."""
+    return np.zeros((1, 2), dtype=np.int64), np.ones(1)
+
+
 def jitter_offsets(noise: KinectNoise) -> tuple[np.ndarray, np.ndarray]:
     """The pixel offsets (J, 2) (du, dv), (0, 0) first, that the sensor's lateral jitter takes a pixel's
     sample to, and how likely each is (J,), summing to 1: a normal of ``lateral_sigma_px`` pixels on each
@@ -31,7 +36,7 @@ def jitter_offsets(noise: KinectNoise) -> tuple[np.ndarray, np.ndarray]:
     cloud's own focal length, and a scattered cloud's from its spacing). Only (0, 0) for a sensor without
     lateral jitter."""
     if not noise.lateral:
-        return np.zeros((1, 2), dtype=np.int64), np.ones(1)
+        return own_pixel()
     sigma = noise.lateral_sigma_px
     reach = int(np.ceil(6 * sigma)) + 1
     steps = np.arange(-reach, reach + 1)
