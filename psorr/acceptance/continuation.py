@@ -22,8 +22,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.ndimage import binary_closing, binary_dilation
 from scipy.spatial import cKDTree
+from scipy.special import ndtri
 
 from psorr.checks import params as check
+from psorr.sensing.noise_context import depth_noise
 from psorr.verification.point_check import CheckParams, depth_tolerance, visible_model_points
 from psorr.verification.scene_view import SceneView
 
@@ -31,19 +33,23 @@ from psorr.verification.scene_view import SceneView
 @dataclass(frozen=True)
 class ContinuationParams:
     """``ring`` metres of outline around a pose are looked at; a ring point within the depth tolerance
-    (``check``) of the tangent plane of one of the ``neighbours`` visible model points nearest it, and more
-    than ``off_support`` metres above the supporting plane, continues the model's surface. At most
+    (``check``) of the tangent plane of one of the ``neighbours`` visible model points nearest it, and off the
+    supporting plane, continues the model's surface. Off the plane is higher than the sensor's noise lifts
+    ``table_share`` of the plane's own points (a one-sided Gaussian bar on the sensor model's height sigma at
+    the point), and at least ``off_support`` metres, the bar of a sensor without noise. At most
     ``max_points`` model points are tested for what shows and give tangent planes; the silhouette takes every one."""
 
     ring: float = 0.01
     neighbours: int = 16
-    off_support: float = 0.006
+    table_share: float = 0.01
+    off_support: float = 0.001
     max_points: int = 6000
     check: CheckParams = CheckParams()
 
     def __post_init__(self):
         check.positive(self, "ring", unit=" metres")
         check.non_negative(self, "off_support", unit=" metres")
+        check.within(self, "table_share", closed=False)
         check.whole(self, "neighbours", "max_points")
         check.instance(self, "check", CheckParams)
 
@@ -94,8 +100,17 @@ def continued_share(view: SceneView, model_points: np.ndarray, model_normals: np
     off_plane = np.abs(np.einsum("ijk,ijk->ij", q[:, None] - pts[nearest], nrm[nearest]))
     on_face = (off_plane < depth_tolerance(depth, params.check)[:, None]).any(axis=1)
     if view.support_plane is not None:
-        on_face &= q @ view.support_plane[:3] + view.support_plane[3] > params.off_support
+        on_face &= q @ view.support_plane[:3] + view.support_plane[3] > _off_support_bar(q, view.support_plane, params)
     return float(on_face.mean())
+
+
+def _off_support_bar(points: np.ndarray, plane: np.ndarray, params: ContinuationParams) -> np.ndarray:
+    """(N,) the height (m) over the supporting ``plane`` past which each ring point (N, 3) is off it: where the
+    sensor's noise lifts ``table_share`` of the plane's own points. A part lying flat continues the table's
+    plane by design, and a thin one's top face lies within the depth tolerance of the table, so every table
+    point this bar lets through counts as going on: the bar keeps them to a tenth of the share that drops a pose."""
+    sigma = depth_noise().height_sigma(points, plane[:3])
+    return np.maximum(params.off_support, -ndtri(params.table_share) * sigma)
 
 
 def _around_measured(view: SceneView, points: np.ndarray, u: np.ndarray, v: np.ndarray, corner: tuple[int, int],
