@@ -206,7 +206,7 @@ class Acceptance:
             claim = self._claim(view, f, claims, resolved_from)
             if claim is None or on_larger_object(view, f.model.points, f.model.normals,
                                                  claim.detection.T_cloud_model, self.params.max_continued,
-                                                 self.params.continuation):
+                                                 self.params.continuation, self.resolvers[f.model.name].renderer):
                 observer().rejected(f.model.name, f.T_cloud_model, "its pixels are a better detection's" if claim
                                     is None else "part of a larger object")
                 continue

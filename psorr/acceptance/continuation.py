@@ -6,13 +6,15 @@ box's corner, a chassis on a box's top (the OSD learn set's boxes took 43 such d
 clouds). What tells them apart lies just outside the model: there the box's faces go on, in the
 planes of the model's faces, where a real bracket's outline would show the table or a gap.
 
-The check looks at a ring of pixels around the pose's silhouette (every posed model point, gaps
-between samples closed), where the outline is in view (beside model points the sensor measures, not
-beside an occluder), and asks, for each measured ring pixel off the supporting plane, whether it lies
-on the tangent plane of one of the visible model points nearest it in space. One nearest point is not
-enough: past a bracket's leg the nearest points are on the leg's 5 mm top edge, whose plane is across
-the box face that goes on above the leg, and the leg's own face is a few millimetres further. The
-supporting plane is left out: a part lying flat on the table continues the table's plane by design.
+The check looks at a ring of pixels around the pose's silhouette (the posed mesh rendered, and every
+posed model point's pixel, gaps between samples closed), where the outline is in view (beside model points the
+sensor measures, not beside an occluder), and asks, for each measured ring pixel off the supporting
+plane, whether it lies on the tangent plane of one of the visible model points nearest it in space. One
+nearest point is not enough: past a bracket's leg the nearest points are on the leg's 5 mm top edge,
+whose plane is across the box face that goes on above the leg, and the leg's own face is a few
+millimetres further. The supporting plane is left out, by the sensor's noise: a part lying flat on the
+table continues the table's plane by design. A pixel beside the outline may read the model's own face
+through the sensor's lateral jitter; it counts only what it shows beyond that chance.
 """
 
 from __future__ import annotations
@@ -20,12 +22,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.ndimage import binary_closing, binary_dilation
+from scipy.ndimage import binary_closing, binary_dilation, correlate
 from scipy.spatial import cKDTree
 from scipy.special import ndtri
 
 from psorr.checks import params as check
 from psorr.sensing.noise_context import depth_noise
+from psorr.verification.depth_compare import DepthRenderer
+from psorr.verification.lateral_jitter import jitter_offsets
 from psorr.verification.point_check import CheckParams, depth_tolerance, visible_model_points
 from psorr.verification.scene_view import SceneView
 
@@ -55,9 +59,11 @@ class ContinuationParams:
 
 
 def continued_share(view: SceneView, model_points: np.ndarray, model_normals: np.ndarray, T_cloud_model: np.ndarray,
-                    params: ContinuationParams = ContinuationParams()) -> float:
+                    params: ContinuationParams = ContinuationParams(), renderer: DepthRenderer | None = None) -> float:
     """Share in [0, 1] of the measured pixels in a ring around the pose's silhouette whose point continues a
-    face of the model (see the module docstring); 0 when the pose shows nothing."""
+    face of the model beyond the chance that the sensor's jitter read the model itself there (see the module
+    docstring); 0 when the pose shows nothing. The silhouette is the samples', and with the model's mesh
+    ``renderer`` the rendered mesh's too."""
     stride = max(1, len(model_points) // params.max_points)
     R, t = T_cloud_model[:3, :3], T_cloud_model[:3, 3]
     posed = model_points @ R.T + t
@@ -82,6 +88,8 @@ def continued_share(view: SceneView, model_points: np.ndarray, model_normals: np
     in_window = inside & (every_u >= u0) & (every_u < u1) & (every_v >= v0) & (every_v < v1)
     covered[every_v[in_window] - v0, every_u[in_window] - u0] = True
     silhouette = binary_closing(covered, iterations=2)  # the visible points are among them
+    if renderer is not None:
+        silhouette |= _rendered_silhouette(view, renderer, T_cloud_model, (u0, v0), shape)
     ring = binary_dilation(silhouette, iterations=reach) & ~silhouette
     ring &= _around_measured(view, pts[visible], u, v, (u0, v0), shape, reach, params)
     rv, ru = np.nonzero(ring)
@@ -90,6 +98,7 @@ def continued_share(view: SceneView, model_points: np.ndarray, model_normals: np
     if not measured.any():
         return 0.0
     rv, ru, depth = rv[measured], ru[measured], depth[measured]
+    own = _own_read_chance(silhouette)[rv, ru]
     q = np.column_stack([(ru + u0 - view.cx) * depth / view.focal, (rv + v0 - view.cy) * depth / view.focal, depth])
     # The default 16 nearest of the ~1 mm spaced samples span about 4 mm: past an edge face they take in
     # the faces it joins. Thinned samples keep that span with fewer: 16 of every fifth of a 300 mm tray's
@@ -101,7 +110,10 @@ def continued_share(view: SceneView, model_points: np.ndarray, model_normals: np
     on_face = (off_plane < depth_tolerance(depth, params.check)[:, None]).any(axis=1)
     if view.support_plane is not None:
         on_face &= q @ view.support_plane[:3] + view.support_plane[3] > _off_support_bar(q, view.support_plane, params)
-    return float(on_face.mean())
+    # A ring pixel beside the outline reads the model's own face with the jitter's chance ``own``, and that reading
+    # goes on past the outline by itself: each pixel counts what it shows beyond that chance, so a true pose's
+    # band beside the outline adds nothing on average, and a larger object's, which goes on whatever it reads, all.
+    return max(0.0, float(np.mean((on_face - own) / (1.0 - own))))
 
 
 def _off_support_bar(points: np.ndarray, plane: np.ndarray, params: ContinuationParams) -> np.ndarray:
@@ -111,6 +123,29 @@ def _off_support_bar(points: np.ndarray, plane: np.ndarray, params: Continuation
     point this bar lets through counts as going on: the bar keeps them to a tenth of the share that drops a pose."""
     sigma = depth_noise().height_sigma(points, plane[:3])
     return np.maximum(params.off_support, -ndtri(params.table_share) * sigma)
+
+
+def _rendered_silhouette(view: SceneView, renderer: DepthRenderer, T_cloud_model: np.ndarray,
+                         corner: tuple[int, int], shape: tuple[int, int]) -> np.ndarray:
+    """(``shape``) bool: the window's pixels (from ``corner`` u0, v0) whose ray meets the posed mesh. Samples
+    fall short of the outline by up to half their spacing, which a sensor of fine pixels sees: at 1280x720 a
+    bracket's 5 mm base, read one or two pixels past its samples, went on past its own outline. A pixel a
+    sample falls in is covered too, though its centre's ray may miss: a pose a millimetre off shifts a
+    millimetre-pixel outline by a pixel, and the rendered outline alone then put true poses past the bar."""
+    u0, v0 = corner
+    V, U = np.mgrid[v0:v0 + shape[0], u0:u0 + shape[1]]
+    depth = renderer.depth(T_cloud_model[None], view.rays(U.ravel(), V.ravel()))[0]
+    return np.isfinite(depth).reshape(shape)
+
+
+def _own_read_chance(silhouette: np.ndarray) -> np.ndarray:
+    """(H, W) the chance that the sensor's lateral jitter takes each pixel's sample inside the ``silhouette``
+    (H, W) bool (:func:`psorr.verification.lateral_jitter.jitter_offsets`); 0 for a sensor without jitter."""
+    offsets, weights = jitter_offsets(depth_noise())
+    reach = int(np.abs(offsets).max())
+    kernel = np.zeros((2 * reach + 1, 2 * reach + 1))
+    kernel[offsets[:, 1] + reach, offsets[:, 0] + reach] = weights
+    return correlate(silhouette.astype(float), kernel, mode="constant")
 
 
 def _around_measured(view: SceneView, points: np.ndarray, u: np.ndarray, v: np.ndarray, corner: tuple[int, int],
@@ -128,10 +163,11 @@ def _around_measured(view: SceneView, points: np.ndarray, u: np.ndarray, v: np.n
 
 
 def on_larger_object(view: SceneView, model_points: np.ndarray, model_normals: np.ndarray, T_cloud_model: np.ndarray,
-                     max_continued: float | None, params: ContinuationParams) -> bool:
+                     max_continued: float | None, params: ContinuationParams,
+                     renderer: DepthRenderer | None = None) -> bool:
     """Does the measured surface go on past the pose's outline, in its faces' planes, on more than
     ``max_continued`` of the ring (:func:`continued_share`)? An L bracket in a box's corner passes every check on
     the surface it would show; the box's faces beyond its legs do not. Never, with max_continued None.
     1-5 ms a pose: recognition asks it only of the candidates it would accept."""
     return max_continued is not None and continued_share(
-        view, model_points, model_normals, T_cloud_model, params) > max_continued
+        view, model_points, model_normals, T_cloud_model, params, renderer) > max_continued
