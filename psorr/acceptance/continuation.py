@@ -24,7 +24,6 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.ndimage import binary_closing, binary_dilation, correlate
 from scipy.spatial import cKDTree
-from scipy.special import ndtri
 
 from psorr.checks import params as check
 from psorr.sensing.noise_context import depth_noise
@@ -121,8 +120,7 @@ def _off_support_bar(points: np.ndarray, plane: np.ndarray, params: Continuation
     sensor's noise lifts ``table_share`` of the plane's own points. A part lying flat continues the table's
     plane by design, and a thin one's top face lies within the depth tolerance of the table, so every table
     point this bar lets through counts as going on: the bar keeps them to a tenth of the share that drops a pose."""
-    sigma = depth_noise().height_sigma(points, plane[:3])
-    return np.maximum(params.off_support, -ndtri(params.table_share) * sigma)
+    return np.maximum(params.off_support, depth_noise().height_lifted(points, plane[:3], params.table_share))
 
 
 def _rendered_silhouette(view: SceneView, renderer: DepthRenderer, T_cloud_model: np.ndarray,

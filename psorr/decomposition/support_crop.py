@@ -16,7 +16,6 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.ndimage import binary_dilation
 from scipy.spatial import cKDTree
-from scipy.special import ndtri
 
 from psorr.checks import params as check
 from psorr.geometry.boxes import orthonormal_frame
@@ -51,8 +50,7 @@ def standing_bar(points: np.ndarray, plane: np.ndarray, params: SupportCropParam
     n_points = len(points) if n_points is None else n_points
     bar = np.full(len(points), params.off_plane)
     if params.sensor_noise and n_points > 1:
-        sigmas = -ndtri(1.0 / n_points)
-        bar = np.maximum(bar, sigmas * depth_noise().height_sigma(points, plane[:3]))
+        bar = np.maximum(bar, depth_noise().height_lifted(points, plane[:3], 1.0 / n_points))
     return bar
 
 

@@ -23,6 +23,7 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
+from scipy.special import ndtri
 
 from psorr.errors import InvalidInputError
 from psorr.sensing.camera import CameraIntrinsics, checked_depth
@@ -104,6 +105,11 @@ class KinectNoise:
         axial = self.depth_sigma(z, fx) * np.abs(points @ normal) / z
         lateral = self.lateral_sigma_px * z / fx * np.hypot(normal[0], normal[1])
         return np.hypot(axial, lateral)
+
+    def height_lifted(self, points, normal, share: float, fx: float = 525.0) -> np.ndarray:
+        """(N,) the height (metres) over a plane of unit ``normal`` (3,) that the noise lifts ``share`` (0, 1) of
+        the plane's own points (N, 3) past: a one-sided Gaussian bar of :meth:`height_sigma`."""
+        return -ndtri(share) * self.height_sigma(points, normal, fx)
 
     def quantisation_step(self, z, fx: float = 525.0) -> np.ndarray:
         """Depth step (metres) between neighbouring disparity levels at depth z."""
